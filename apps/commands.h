@@ -1,0 +1,26 @@
+// The subcommands of `catgraph`. Each Add*Command registers its options and a
+// callback on `app`; the callback writes its report to `out` and throws
+// FileError or std::invalid_argument on bad input, which main() turns into a
+// one-line message and a non-zero exit status.
+#ifndef CATGRAPH_APPS_COMMANDS_H_
+#define CATGRAPH_APPS_COMMANDS_H_
+
+#include <ostream>
+
+#include <CLI/CLI.hpp>
+
+namespace catgraph {
+
+void AddInfoCommand(CLI::App& app, std::ostream& out);
+void AddGenerateGraphCommand(CLI::App& app, std::ostream& out);
+
+// Builds the whole command-line interface, writing reports to `out`.
+void AddAllCommands(CLI::App& app, std::ostream& out);
+
+// Runs `catgraph` with `args` (args[0] is the program name); returns the exit
+// status. Reports go to `out`, errors to `err`. main() and the tests share it.
+int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_APPS_COMMANDS_H_

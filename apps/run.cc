@@ -1,0 +1,49 @@
+#include <exception>
+#include <stdexcept>
+
+#include "apps/commands.h"
+#include "backend/io/file_error.h"
+
+namespace catgraph {
+
+void AddAllCommands(CLI::App& app, std::ostream& out) {
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "catgraph 0.1.0");
+  AddInfoCommand(app, out);
+  AddGenerateGraphCommand(app, out);
+}
+
+int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app{
+      "catgraph: mapping in environments whose appearance changes.\n"
+      "CAT-Graph+ front end, robust pose-graph back end, experiments and export.",
+      "catgraph"};
+  AddAllCommands(app, out);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    out << app.help();  // delegates to the selected subcommand
+    return 0;
+  } catch (const CLI::CallForAllHelp&) {
+    out << app.help("", CLI::AppFormatMode::All);
+    return 0;
+  } catch (const CLI::CallForVersion&) {
+    out << "catgraph 0.1.0\n";
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    err << "catgraph: " << e.what() << "\nRun 'catgraph --help' for the commands and options.\n";
+    return 2;
+  } catch (const FileError& e) {
+    err << "catgraph: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::invalid_argument& e) {
+    err << "catgraph: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    err << "catgraph: internal error: " << e.what() << '\n';
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace catgraph

@@ -1,0 +1,61 @@
+#include "backend/io/atomic_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "backend/io/file_error.h"
+
+namespace catgraph {
+namespace {
+
+// Flushes file data to disk so that the rename cannot expose an empty file
+// after a power loss.
+void SyncFile(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+void WriteFileAtomically(const std::filesystem::path& path,
+                         const std::function<void(std::ostream&)>& write) {
+  const std::string name = path.string();
+  if (std::filesystem::is_directory(path)) {
+    throw FileError(name, 0, "is a directory; expected a file name to write");
+  }
+  // The process id and a counter keep concurrent writers of the same final
+  // name from sharing a temporary file.
+  static std::atomic<unsigned> counter{0};
+  std::filesystem::path tmp = path;
+  tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+  try {
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) {
+        throw FileError(name, 0, std::string("cannot create file: ") + std::strerror(errno));
+      }
+      write(out);
+      out.flush();
+      if (!out) throw FileError(name, 0, "write failed (disk full?)");
+    }
+    SyncFile(tmp);
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw FileError(name, 0, "cannot rename temporary file into place: " + ec.message());
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw;
+  }
+}
+
+}  // namespace catgraph

@@ -1,0 +1,22 @@
+// Writing a file so that readers never see it half-written.
+//
+// The content goes to a temporary file in the same directory, is flushed and
+// synced, and is then renamed over the final name, which POSIX makes atomic.
+// If the writer throws or the stream fails, the temporary file is removed and
+// the final name keeps whatever it held before.
+#ifndef CATGRAPH_BACKEND_IO_ATOMIC_FILE_H_
+#define CATGRAPH_BACKEND_IO_ATOMIC_FILE_H_
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+
+namespace catgraph {
+
+// Throws FileError when the file cannot be created, written or renamed.
+void WriteFileAtomically(const std::filesystem::path& path,
+                         const std::function<void(std::ostream&)>& write);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_IO_ATOMIC_FILE_H_

@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# catgraph's one set-up script: installs the Debian packages the project needs
+# when they are missing, configures and builds, then runs the main job or the
+# test suite.
+#
+#   scripts/setup.sh demo    install, build, run the main job (README command 1)
+#   scripts/setup.sh test    install, build, run the whole test suite, then
+#                            again under AddressSanitizer + UBSan (README command 2)
+#   scripts/setup.sh build   install and build only
+#
+# Idempotent; works as root or through sudo. Environment: CATGRAPH_JOBS (build
+# parallelism, default 2), CATGRAPH_BUILD_DIR (default build).
+set -euo pipefail
+
+mode="${1:-demo}"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+jobs="${CATGRAPH_JOBS:-2}"
+build_dir="${CATGRAPH_BUILD_DIR:-$root/build}"
+
+case "$mode" in
+  demo|test|build) ;;
+  *) echo "usage: scripts/setup.sh [demo|test|build]" >&2; exit 2 ;;
+esac
+
+install_missing_packages() {
+  local missing=()
+  while read -r package; do
+    [[ -z "$package" || "$package" == \#* ]] && continue
+    if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$package")
+    fi
+  done < "$root/scripts/packages.txt"
+  if (( ${#missing[@]} == 0 )); then
+    echo "setup: all Debian packages present"
+    return
+  fi
+  local sudo=()
+  if (( EUID != 0 )); then
+    if ! command -v sudo >/dev/null; then
+      echo "setup: need root or sudo to install: ${missing[*]}" >&2
+      exit 1
+    fi
+    sudo=(sudo)
+  fi
+  echo "setup: installing ${missing[*]}"
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# configure_and_build BUILD_DIR [extra cmake arguments...]
+configure_and_build() {
+  local dir="$1"; shift
+  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DCATGRAPH_WERROR=ON "$@" >/dev/null
+  cmake --build "$dir" -j "$jobs"
+}
+
+install_missing_packages
+configure_and_build "$build_dir"
+
+case "$mode" in
+  build) ;;
+  demo)
+    # The main job until the mapping pipeline lands: simulate a pose graph with
+    # ground truth and summarise it.
+    out="$root/out/demo"
+    mkdir -p "$out"
+    "$build_dir/apps/catgraph" generate-graph -o "$out/graph.g2o" --truth "$out/truth.g2o" \
+      --poses 1000 --seed 1
+    "$build_dir/apps/catgraph" info "$out/graph.g2o"
+    ;;
+  test)
+    ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
+    echo "setup: the suite again under AddressSanitizer + UndefinedBehaviorSanitizer"
+    configure_and_build "$build_dir-sanitize" -DCATGRAPH_SANITIZE=ON -DCATGRAPH_BUILD_BENCH=OFF
+    ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      ctest --test-dir "$build_dir-sanitize" -j "$jobs" --output-on-failure
+    ;;
+esac

@@ -1,0 +1,51 @@
+// Helpers shared by the tests: seeded random poses and data locations.
+#ifndef CATGRAPH_TESTS_TEST_SUPPORT_H_
+#define CATGRAPH_TESTS_TEST_SUPPORT_H_
+
+#include <filesystem>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "backend/graph/pose2.h"
+#include "backend/graph/pose3.h"
+
+namespace catgraph::testing {
+
+inline Pose2 RandomPose2(std::mt19937_64& rng, double extent_m = 10.0) {
+  std::uniform_real_distribution<double> t(-extent_m, extent_m);
+  std::uniform_real_distribution<double> a(-std::numbers::pi, std::numbers::pi);
+  return {t(rng), t(rng), a(rng)};
+}
+
+inline Pose3 RandomPose3(std::mt19937_64& rng, double extent_m = 10.0) {
+  std::uniform_real_distribution<double> t(-extent_m, extent_m);
+  std::normal_distribution<double> n(0.0, 1.0);
+  // A normalised 4D Gaussian is uniform on the rotation group.
+  const Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  return {Eigen::Vector3d(t(rng), t(rng), t(rng)), q};
+}
+
+inline bool ApproxEqual(const Pose2& a, const Pose2& b, double tol = 1e-9) {
+  return std::abs(a.x() - b.x()) <= tol && std::abs(a.y() - b.y()) <= tol &&
+         std::abs(WrapAngle(a.theta() - b.theta())) <= tol;
+}
+
+inline bool ApproxEqual(const Pose3& a, const Pose3& b, double tol = 1e-9) {
+  return (a.translation() - b.translation()).norm() <= tol &&
+         RotationAngle(a.rotation().conjugate() * b.rotation()) <= tol;
+}
+
+inline std::filesystem::path Fixture(const std::string& name) {
+  return std::filesystem::path(CATGRAPH_TEST_FIXTURES) / name;
+}
+
+// The shared pose-graph folder, or an empty path when it is absent.
+inline std::filesystem::path SharedPoseGraphs() {
+  const std::filesystem::path path = std::filesystem::path(CATGRAPH_SHARED_DATASETS) / "pose-graphs";
+  return std::filesystem::is_directory(path) ? path : std::filesystem::path();
+}
+
+}  // namespace catgraph::testing
+
+#endif  // CATGRAPH_TESTS_TEST_SUPPORT_H_
