@@ -13,6 +13,7 @@ namespace catgraph {
 
 void AddInfoCommand(CLI::App& app, std::ostream& out);
 void AddGenerateGraphCommand(CLI::App& app, std::ostream& out);
+void AddOptimizeCommand(CLI::App& app, std::ostream& out);
 
 // Builds the whole command-line interface, writing reports to `out`.
 void AddAllCommands(CLI::App& app, std::ostream& out);

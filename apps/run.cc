@@ -11,6 +11,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   app.set_version_flag("--version", "catgraph 0.1.0");
   AddInfoCommand(app, out);
   AddGenerateGraphCommand(app, out);
+  AddOptimizeCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -37,6 +38,9 @@ int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostre
     err << "catgraph: error: " << e.what() << '\n';
     return 1;
   } catch (const std::invalid_argument& e) {
+    err << "catgraph: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::runtime_error& e) {
     err << "catgraph: error: " << e.what() << '\n';
     return 1;
   } catch (const std::exception& e) {

@@ -1,0 +1,122 @@
+// catgraph optimize IN -o OUT [--method M] [--report R] [--drop-rejected] [--json]
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "backend/io/atomic_file.h"
+#include "backend/io/graph_io.h"
+#include "backend/pose_graph_optimizer.h"
+
+namespace catgraph {
+namespace {
+
+struct OptimizeOptions {
+  std::string input;
+  std::string output;
+  std::string format = "auto";
+  std::string method = "switchable";
+  std::string report;
+  bool drop_rejected = false;
+  bool json = false;
+  PoseGraphOptimizerOptions optimizer;
+};
+
+nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization& r,
+                          bool with_closures) {
+  nlohmann::json j;
+  j["input"] = o.input;
+  j["output"] = o.output;
+  j["method"] = o.method;
+  j["termination"] = r.summary.IsUsable() ? "usable" : "failed";
+  j["message"] = r.summary.message;
+  j["iterations"] = r.summary.iterations;
+  j["initial_cost"] = r.summary.initial_cost;
+  j["final_cost"] = r.summary.final_cost;
+  j["chi2"] = r.chi2;
+  j["time_s"] = r.summary.time_s;
+  j["accepted"] = r.accepted;
+  j["rejected"] = r.rejected;
+  if (with_closures) {
+    j["closures"] = nlohmann::json::array();
+    for (const auto& d : r.closures) {
+      j["closures"].push_back({{"id", d.id.value()},
+                               {"from", d.from.value()},
+                               {"to", d.to.value()},
+                               {"kind", ToString(d.kind)},
+                               {"weight", d.weight},
+                               {"accepted", d.accepted}});
+    }
+  }
+  return j;
+}
+
+void RunOptimize(OptimizeOptions options, std::ostream& out) {
+  ReadGraphOptions read_options;
+  read_options.format = *GraphFormatFromString(options.format);
+  const GraphFile file = ReadGraphFile(options.input, read_options);
+  options.optimizer.method = *RobustMethodFromString(options.method);
+  const PoseGraphOptimization result = OptimizePoseGraph(file.graph, options.optimizer);
+  if (!result.summary.IsUsable()) {
+    throw std::runtime_error("the solver failed: " + result.summary.message);
+  }
+  WriteG2oFile(options.drop_rejected ? DropRejected(result.graph, result.closures) : result.graph,
+               options.output);
+  if (!options.report.empty()) {
+    WriteFileAtomically(options.report, [&](std::ostream& report) {
+      report << ReportJson(options, result, true).dump(2) << '\n';
+    });
+  }
+  if (options.json) {
+    out << ReportJson(options, result, false).dump(2) << '\n';
+    return;
+  }
+  out << "optimised " << options.input << " with " << options.method << ": "
+      << result.summary.BriefReport() << '\n'
+      << "chi2 " << result.chi2 << "; loop closures: " << result.accepted << " accepted, "
+      << result.rejected << " rejected\n"
+      << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "")
+      << '\n';
+}
+
+}  // namespace
+
+void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<OptimizeOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "optimize", "Optimise a 2D or 3D pose graph robustly to false loop closures and write "
+                  "the corrected graph (g2o) with what was decided about every closure.");
+  cmd->alias("optimise");
+  cmd->add_option("input", o->input, "Pose-graph file (g2o, TORO, iSAM)")->required();
+  cmd->add_option("-o,--output", o->output, "Corrected graph (g2o)")->required();
+  cmd->add_option("--format", o->format, "Input format")
+      ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
+      ->capture_default_str();
+  cmd->add_option("--method", o->method, "Robust method for loop closures")
+      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber"}))
+      ->capture_default_str();
+  cmd->add_option("--report", o->report,
+                  "Write a JSON report with every loop closure's weight and decision");
+  cmd->add_flag("--drop-rejected", o->drop_rejected,
+                "Write only accepted closures and no switches (the graph for a planner)");
+  cmd->add_flag("--json", o->json,
+                "Print one JSON object (iterations, initial_cost, final_cost, chi2, time_s, "
+                "accepted, rejected, ...)");
+  cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
+                  "Information of each new switch's prior (Xi^-1)")
+      ->capture_default_str();
+  cmd->add_option("--dcs-phi", o->optimizer.dcs_phi, "DCS Phi")->capture_default_str();
+  cmd->add_option("--loss-scale", o->optimizer.loss_scale_sigma,
+                  "Huber/Cauchy scale in sigmas")
+      ->capture_default_str();
+  cmd->add_flag("--robust-odometry", o->optimizer.robust_odometry,
+                "Apply the robust method to odometry too");
+  cmd->add_option("--max-iterations", o->optimizer.solver.max_iterations,
+                  "Levenberg-Marquardt iterations")
+      ->capture_default_str();
+  cmd->callback([o, &out] { RunOptimize(*o, out); });
+}
+
+}  // namespace catgraph

@@ -1,0 +1,124 @@
+#include "backend/factors.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <ceres/ceres.h>
+
+#include "backend/cost_functors.h"
+#include "backend/robust_losses.h"
+
+namespace catgraph {
+
+template <int N>
+Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& information) {
+  Eigen::LLT<Eigen::Matrix<double, N, N>> llt(information);
+  if (llt.info() == Eigen::Success) return llt.matrixU();
+  constexpr int kTranslation = N == 3 ? 2 : 3;
+  Eigen::Matrix<double, N, N> blocks = Eigen::Matrix<double, N, N>::Zero();
+  blocks.template topLeftCorner<kTranslation, kTranslation>() =
+      information.template topLeftCorner<kTranslation, kTranslation>();
+  blocks.template bottomRightCorner<N - kTranslation, N - kTranslation>() =
+      information.template bottomRightCorner<N - kTranslation, N - kTranslation>();
+  Eigen::LLT<Eigen::Matrix<double, N, N>> block_llt(blocks);
+  if (block_llt.info() != Eigen::Success) {
+    throw std::invalid_argument("information matrix is not positive definite");
+  }
+  return block_llt.matrixU();
+}
+template Eigen::Matrix<double, 3, 3> SqrtInformation<3>(const Eigen::Matrix<double, 3, 3>&);
+template Eigen::Matrix<double, 6, 6> SqrtInformation<6>(const Eigen::Matrix<double, 6, 6>&);
+
+template <typename PoseT>
+BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
+                                    const RelativePoseMeasurement<PoseT>& measurement,
+                                    RobustLoss loss)
+    : from_(from),
+      to_(to),
+      mean_(measurement.mean),
+      sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
+      loss_(loss) {
+  if (loss.type != RobustLoss::Type::kNone && !(loss.scale > 0.0)) {
+    throw std::invalid_argument("BetweenFactor: robust loss scale must be > 0, got " +
+                                std::to_string(loss.scale));
+  }
+}
+
+template <typename PoseT>
+std::unique_ptr<ceres::CostFunction> BetweenFactor<PoseT>::NewCostFunction() const {
+  return std::unique_ptr<ceres::CostFunction>(
+      RelativePoseCost<PoseT>::Create(mean_, sqrt_information_));
+}
+
+std::unique_ptr<ceres::LossFunction> NewLoss(const RobustLoss& loss) {
+  switch (loss.type) {
+    case RobustLoss::Type::kNone: return nullptr;
+    case RobustLoss::Type::kHuber: return std::make_unique<ceres::HuberLoss>(loss.scale);
+    case RobustLoss::Type::kCauchy: return std::make_unique<ceres::CauchyLoss>(loss.scale);
+    case RobustLoss::Type::kDcs: return std::make_unique<DcsLoss>(loss.scale);
+  }
+  return nullptr;
+}
+
+template <typename PoseT>
+std::unique_ptr<ceres::LossFunction> BetweenFactor<PoseT>::NewLossFunction() const {
+  return NewLoss(loss_);
+}
+
+template <typename PoseT>
+SwitchableBetweenFactor<PoseT>::SwitchableBetweenFactor(
+    PoseId from, PoseId to, SwitchId switch_id, const RelativePoseMeasurement<PoseT>& measurement,
+    SwitchFunction function)
+    : from_(from),
+      to_(to),
+      switch_(switch_id),
+      mean_(measurement.mean),
+      sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
+      function_(function) {}
+
+template <typename PoseT>
+std::unique_ptr<ceres::CostFunction> SwitchableBetweenFactor<PoseT>::NewCostFunction() const {
+  return std::unique_ptr<ceres::CostFunction>(
+      SwitchableRelativePoseCost<PoseT>::Create(mean_, sqrt_information_, function_));
+}
+
+template <typename PoseT>
+std::vector<ParameterBound> SwitchableBetweenFactor<PoseT>::bounds() const {
+  if (function_ == SwitchFunction::kSigmoid) return {};
+  return {ParameterBound{SwitchKey(switch_), 0, 0.0, 1.0}};
+}
+
+SwitchPriorFactor::SwitchPriorFactor(SwitchId id, const SwitchPrior& prior)
+    : id_(id), prior_(prior) {
+  if (!(prior.information > 0.0)) {
+    throw std::invalid_argument("SwitchPriorFactor: information must be > 0, got " +
+                                std::to_string(prior.information));
+  }
+}
+
+std::unique_ptr<ceres::CostFunction> SwitchPriorFactor::NewCostFunction() const {
+  return std::unique_ptr<ceres::CostFunction>(
+      SwitchPriorCost::Create(prior_.mean, prior_.information));
+}
+
+template <typename PoseT>
+PriorFactor<PoseT>::PriorFactor(PoseId id, const PoseT& prior,
+                                const InformationMatrix<PoseT>& information)
+    : id_(id), prior_(prior), sqrt_information_(SqrtInformation<PoseT::kTangentDim>(information)) {}
+
+template <typename PoseT>
+std::unique_ptr<ceres::CostFunction> PriorFactor<PoseT>::NewCostFunction() const {
+  return std::unique_ptr<ceres::CostFunction>(
+      PosePriorCost<PoseT>::Create(prior_, sqrt_information_));
+}
+
+template class BetweenFactor<Pose2>;
+template class BetweenFactor<Pose3>;
+template class SwitchableBetweenFactor<Pose2>;
+template class SwitchableBetweenFactor<Pose3>;
+template class PriorFactor<Pose2>;
+template class PriorFactor<Pose3>;
+
+}  // namespace catgraph

@@ -1,0 +1,103 @@
+// The standard factors of the pose graph. Each documents its error; residuals
+// are scaled by the upper Cholesky factor U of the information (U^T U = Omega).
+#ifndef CATGRAPH_BACKEND_FACTORS_H_
+#define CATGRAPH_BACKEND_FACTORS_H_
+
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "backend/factor_graph.h"
+#include "backend/graph/pose_graph.h"
+
+namespace catgraph {
+
+// How a switch scales its constraint: Psi(s) = s with s in [0, 1]
+// (Vertigo's default), or the sigmoid 1 / (1 + e^-s) with s unbounded.
+enum class SwitchFunction { kLinear, kSigmoid };
+
+// A robust loss applied to a factor's squared residual norm.
+struct RobustLoss {
+  enum class Type { kNone, kHuber, kCauchy, kDcs };
+  Type type = Type::kNone;
+  // Huber / Cauchy: the residual norm (in sigmas) where the loss bends.
+  // DCS: Phi, the chi2 beyond which the edge is down-weighted.
+  double scale = 1.0;
+};
+
+// The upper Cholesky factor U of `information`. When the whole matrix is
+// indefinite but its translation and rotation blocks are positive definite
+// (se-sync/cubicle.g2o), the coupling is dropped, as SE-Sync does; otherwise
+// throws std::invalid_argument.
+template <int N>
+Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& information);
+
+// e = g2o's error of Z^-1 * X_from^-1 * X_to (cost_functors.h).
+template <typename PoseT>
+class BetweenFactor : public Factor {
+ public:
+  BetweenFactor(PoseId from, PoseId to, const RelativePoseMeasurement<PoseT>& measurement,
+                RobustLoss loss = {});
+  std::vector<Key> keys() const override { return {PoseKey(from_), PoseKey(to_)}; }
+  std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
+  std::unique_ptr<ceres::LossFunction> NewLossFunction() const override;
+
+ private:
+  PoseId from_, to_;
+  PoseT mean_;
+  Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
+  RobustLoss loss_;
+};
+
+// r = Psi(s) U e (Suenderhauf & Protzel 2012).
+template <typename PoseT>
+class SwitchableBetweenFactor : public Factor {
+ public:
+  SwitchableBetweenFactor(PoseId from, PoseId to, SwitchId switch_id,
+                          const RelativePoseMeasurement<PoseT>& measurement,
+                          SwitchFunction function = SwitchFunction::kLinear);
+  std::vector<Key> keys() const override {
+    return {PoseKey(from_), PoseKey(to_), SwitchKey(switch_)};
+  }
+  std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
+  std::vector<ParameterBound> bounds() const override;
+
+ private:
+  PoseId from_, to_;
+  SwitchId switch_;
+  PoseT mean_;
+  Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
+  SwitchFunction function_;
+};
+
+// r = sqrt(information) (gamma - s).
+class SwitchPriorFactor : public Factor {
+ public:
+  SwitchPriorFactor(SwitchId id, const SwitchPrior& prior);
+  std::vector<Key> keys() const override { return {SwitchKey(id_)}; }
+  std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
+
+ private:
+  SwitchId id_;
+  SwitchPrior prior_;
+};
+
+// r = U e(prior, X): the pose's deviation from `prior`, in the prior's frame.
+template <typename PoseT>
+class PriorFactor : public Factor {
+ public:
+  PriorFactor(PoseId id, const PoseT& prior,
+              const InformationMatrix<PoseT>& information);
+  std::vector<Key> keys() const override { return {PoseKey(id_)}; }
+  std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
+
+ private:
+  PoseId id_;
+  PoseT prior_;
+  Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
+};
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_FACTORS_H_

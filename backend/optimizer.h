@@ -1,0 +1,52 @@
+// Solving a FactorGraph with Ceres: Levenberg-Marquardt on a sparse normal
+// Cholesky factorisation (SuiteSparse CHOLMOD).
+#ifndef CATGRAPH_BACKEND_OPTIMIZER_H_
+#define CATGRAPH_BACKEND_OPTIMIZER_H_
+
+#include <string>
+
+#include "backend/factor_graph.h"
+
+namespace catgraph {
+
+struct OptimizerOptions {
+  int max_iterations = 200;            // Levenberg-Marquardt iterations; >= 1
+  double function_tolerance = 1e-10;   // relative cost change that ends the solve; > 0
+  double gradient_tolerance = 1e-12;   // max-norm of the projected gradient; > 0
+  double parameter_tolerance = 1e-10;  // relative step size; > 0
+  int num_threads = 1;                 // Jacobian evaluation threads; >= 1
+};
+
+// Throws std::invalid_argument naming the first bad field.
+void Validate(const OptimizerOptions& options);
+
+enum class Termination { kNotRun, kConverged, kNoConvergence, kFailure };
+
+struct Summary {
+  Termination termination = Termination::kNotRun;
+  std::string message = "Optimize() was not called.";
+  int iterations = 0;
+  double initial_cost = 0.0;  // Ceres' cost: half the sum of squared residuals
+  double final_cost = 0.0;
+  double time_s = 0.0;
+  int residual_blocks = 0;
+  int parameter_blocks = 0;
+
+  // Converged, or stopped at the iteration limit with a finite cost.
+  bool IsUsable() const;
+  std::string BriefReport() const;
+};
+
+struct OptimizationResult {
+  Values values;
+  Summary summary;
+};
+
+// Every key of every factor must be in `initial`; throws std::invalid_argument
+// otherwise.
+OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
+                            const OptimizerOptions& options = {});
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_OPTIMIZER_H_

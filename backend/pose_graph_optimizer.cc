@@ -1,0 +1,218 @@
+#include "backend/pose_graph_optimizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <variant>
+
+#include "backend/initialization.h"
+#include "backend/robust_losses.h"
+
+namespace catgraph {
+namespace {
+
+constexpr std::array<std::pair<RobustMethod, std::string_view>, 5> kMethodNames = {{
+    {RobustMethod::kNone, "none"},
+    {RobustMethod::kSwitchable, "switchable"},
+    {RobustMethod::kDcs, "dcs"},
+    {RobustMethod::kCauchy, "cauchy"},
+    {RobustMethod::kHuber, "huber"},
+}};
+
+template <typename PoseT>
+Eigen::Matrix<double, PoseT::kTangentDim, 1> Error(const PoseT& from, const PoseT& to,
+                                                   const PoseT& z);
+template <>
+Eigen::Matrix<double, 3, 1> Error(const Pose2& from, const Pose2& to, const Pose2& z) {
+  return z.Between(from.Between(to)).ToVector();
+}
+template <>
+Eigen::Matrix<double, 6, 1> Error(const Pose3& from, const Pose3& to, const Pose3& z) {
+  const Pose3 d = z.Between(from.Between(to));
+  Eigen::Quaterniond q = d.rotation();
+  if (q.w() < 0.0) q.coeffs() = -q.coeffs();
+  Eigen::Matrix<double, 6, 1> e;
+  e << d.translation(), q.vec();
+  return e;
+}
+
+template <typename PoseT>
+double EdgeChi2(const PoseGraph<PoseT>& graph, const Constraint<PoseT>& c) {
+  const auto e = Error(*graph.vertices.at(c.from).pose, *graph.vertices.at(c.to).pose,
+                       c.measurement.mean);
+  return e.dot(c.measurement.information * e);
+}
+
+template <typename PoseT>
+double GraphChi2(const PoseGraph<PoseT>& graph) {
+  double chi2 = 0.0;
+  for (const auto& c : graph.constraints) {
+    double scale = 1.0;
+    if (c.switch_id) scale = std::pow(graph.switches.at(*c.switch_id).value, 2);
+    chi2 += scale * EdgeChi2(graph, c);
+  }
+  for (const auto& [id, s] : graph.switches) {
+    if (s.prior) chi2 += s.prior->information * std::pow(s.prior->mean - s.value, 2);
+  }
+  return chi2;
+}
+
+RobustLoss LossFor(const PoseGraphOptimizerOptions& o) {
+  switch (o.method) {
+    case RobustMethod::kDcs: return {RobustLoss::Type::kDcs, o.dcs_phi};
+    case RobustMethod::kCauchy: return {RobustLoss::Type::kCauchy, o.loss_scale_sigma};
+    case RobustMethod::kHuber: return {RobustLoss::Type::kHuber, o.loss_scale_sigma};
+    default: return {};
+  }
+}
+
+// rho'(chi2) for the loss, i.e. the weight an edge of this chi2 keeps.
+double RobustWeight(const RobustLoss& loss, double chi2) {
+  switch (loss.type) {
+    case RobustLoss::Type::kNone: return 1.0;
+    case RobustLoss::Type::kDcs: return DcsLoss::SquaredWeight(loss.scale, chi2);
+    case RobustLoss::Type::kHuber: {
+      const double b = loss.scale * loss.scale;
+      return chi2 <= b ? 1.0 : std::sqrt(b / chi2);
+    }
+    case RobustLoss::Type::kCauchy: {
+      const double b = loss.scale * loss.scale;
+      return 1.0 / (1.0 + chi2 / b);
+    }
+  }
+  return 1.0;
+}
+
+template <typename PoseT>
+PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
+  InitializeBySpanningTree(graph);
+  const bool switchable = options.method == RobustMethod::kSwitchable;
+  const RobustLoss loss = LossFor(options);
+  auto robust = [&](const Constraint<PoseT>& c) {
+    return options.robust_odometry || c.kind != ClosureKind::kOdometry;
+  };
+
+  // New switches continue after every id in use (g2o's shared id space).
+  std::int64_t next_switch = 0;
+  for (const auto& [id, v] : graph.vertices) next_switch = std::max(next_switch, id.value() + 1);
+  for (const auto& [id, s] : graph.switches) next_switch = std::max(next_switch, id.value() + 1);
+  if (switchable) {
+    for (auto& c : graph.constraints) {
+      if (c.switch_id || !robust(c)) continue;
+      const SwitchId id(next_switch++);
+      c.switch_id = id;
+      graph.switches.emplace(id, SwitchVariable{id, 1.0, SwitchPrior{1.0, options.switch_prior_information}});
+    }
+  }
+
+  Values initial;
+  FactorGraph factors;
+  for (const auto& [id, v] : graph.vertices) {
+    initial.Insert(id, *v.pose);
+    if (v.fixed) factors.SetConstant(PoseKey(id));
+  }
+  if (std::none_of(graph.vertices.begin(), graph.vertices.end(),
+                   [](const auto& v) { return v.second.fixed; })) {
+    factors.SetConstant(PoseKey(graph.vertices.begin()->first));  // gauge
+  }
+  for (const auto& [id, s] : graph.switches) {
+    initial.Insert(id, s.value);
+    if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
+  }
+  for (const auto& c : graph.constraints) {
+    if (c.switch_id) {
+      factors.Emplace<SwitchableBetweenFactor<PoseT>>(c.from, c.to, *c.switch_id, c.measurement,
+                                                      options.switch_function);
+    } else {
+      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement,
+                                            robust(c) ? loss : RobustLoss{});
+    }
+  }
+
+  OptimizationResult solved = Optimize(factors, initial, options.solver);
+  for (auto& [id, v] : graph.vertices) {
+    if constexpr (std::is_same_v<PoseT, Pose2>) {
+      v.pose = solved.values.AtPose2(id);
+    } else {
+      v.pose = solved.values.AtPose3(id);
+    }
+  }
+  for (auto& [id, s] : graph.switches) s.value = solved.values.AtSwitch(id);
+
+  PoseGraphOptimization out;
+  for (const auto& c : graph.constraints) {
+    if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
+    ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, true};
+    if (c.switch_id) {
+      const double s = graph.switches.at(*c.switch_id).value;
+      d.weight = options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
+    } else if (robust(c)) {
+      d.weight = RobustWeight(loss, EdgeChi2(graph, c));
+    }
+    d.accepted = d.weight > 0.5;
+    (d.accepted ? out.accepted : out.rejected) += 1;
+    out.closures.push_back(d);
+  }
+  out.summary = solved.summary;
+  out.chi2 = GraphChi2(graph);
+  out.graph = std::move(graph);
+  return out;
+}
+
+template <typename PoseT>
+PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>& decisions) {
+  std::set<ClosureId> rejected;
+  for (const auto& d : decisions) {
+    if (!d.accepted) rejected.insert(d.id);
+  }
+  std::erase_if(graph.constraints, [&](const Constraint<PoseT>& c) {
+    return rejected.contains(c.id) || (c.switch_id && graph.switches.at(*c.switch_id).value <= 0.5);
+  });
+  for (auto& c : graph.constraints) c.switch_id.reset();
+  graph.switches.clear();
+  return graph;
+}
+
+}  // namespace
+
+std::string_view ToString(RobustMethod method) {
+  for (const auto& [m, name] : kMethodNames) {
+    if (m == method) return name;
+  }
+  return "none";
+}
+
+std::optional<RobustMethod> RobustMethodFromString(std::string_view text) {
+  for (const auto& [m, name] : kMethodNames) {
+    if (name == text) return m;
+  }
+  return std::nullopt;
+}
+
+void Validate(const PoseGraphOptimizerOptions& o) {
+  if (!(o.switch_prior_information > 0.0)) {
+    throw std::invalid_argument("switch_prior_information must be > 0");
+  }
+  if (!(o.dcs_phi > 0.0)) throw std::invalid_argument("dcs_phi must be > 0");
+  if (!(o.loss_scale_sigma > 0.0)) throw std::invalid_argument("loss_scale_sigma must be > 0");
+  Validate(o.solver);
+}
+
+PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
+                                        const PoseGraphOptimizerOptions& options) {
+  Validate(options);
+  return std::visit([&](const auto& g) { return Run(g, options); }, graph);
+}
+
+double Chi2(const AnyPoseGraph& graph) {
+  return std::visit([](const auto& g) { return GraphChi2(g); }, graph);
+}
+
+AnyPoseGraph DropRejected(const AnyPoseGraph& graph,
+                          const std::vector<ClosureDecision>& decisions) {
+  return std::visit([&](const auto& g) { return AnyPoseGraph(Drop(g, decisions)); }, graph);
+}
+
+}  // namespace catgraph

@@ -1,0 +1,84 @@
+// Robust optimisation of a PoseGraph: builds the FactorGraph for the chosen
+// method, solves it, and reports what it decided about every loop closure.
+//
+// Robust treatment applies to loop closures (every constraint whose kind is
+// not odometry); odometry is trusted unless `robust_odometry` is set.
+// Constraints that already carry a switch (Vertigo's switchable tags) are
+// optimised as written, with their own switches and priors, whatever the
+// method.
+#ifndef CATGRAPH_BACKEND_POSE_GRAPH_OPTIMIZER_H_
+#define CATGRAPH_BACKEND_POSE_GRAPH_OPTIMIZER_H_
+
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "backend/factors.h"
+#include "backend/graph/pose_graph.h"
+#include "backend/optimizer.h"
+
+namespace catgraph {
+
+enum class RobustMethod {
+  kNone,        // plain least squares
+  kSwitchable,  // switchable constraints (Suenderhauf & Protzel 2012)
+  kDcs,         // dynamic covariance scaling (Agarwal et al. 2013)
+  kCauchy,      // Ceres' Cauchy loss
+  kHuber,       // Ceres' Huber loss
+};
+
+std::string_view ToString(RobustMethod method);
+std::optional<RobustMethod> RobustMethodFromString(std::string_view text);
+
+struct PoseGraphOptimizerOptions {
+  RobustMethod method = RobustMethod::kSwitchable;
+  SwitchFunction switch_function = SwitchFunction::kLinear;
+  // Xi^-1: information of each new switch's prior towards 1 (Vertigo: 1); > 0.
+  double switch_prior_information = 1.0;
+  // DCS: Phi, the chi2 beyond which a closure is down-weighted; > 0.
+  double dcs_phi = 1.0;
+  // Huber / Cauchy: the residual norm, in sigmas, where the loss bends; > 0.
+  double loss_scale_sigma = 1.0;
+  bool robust_odometry = false;  // also apply the method to odometry
+  OptimizerOptions solver;
+};
+
+void Validate(const PoseGraphOptimizerOptions& options);
+
+// What the optimiser decided about one loop closure.
+struct ClosureDecision {
+  ClosureId id;
+  PoseId from, to;
+  ClosureKind kind = ClosureKind::kUnknown;
+  double weight = 1.0;  // the switch Psi(s), or the robust weight rho'(chi2); 1 for `none`
+  bool accepted = true;  // weight > 0.5
+};
+
+struct PoseGraphOptimization {
+  // The input with optimised poses; with switches (new and old) and their
+  // solved values; new switches are attached to their constraints.
+  AnyPoseGraph graph;
+  Summary summary;
+  std::vector<ClosureDecision> closures;  // every loop closure, in graph order
+  std::size_t accepted = 0;
+  std::size_t rejected = 0;
+  double chi2 = 0.0;  // g2o's chi2 of `graph` (see Chi2())
+};
+
+// Vertices without an initial pose are first initialised by chaining
+// odometry along a spanning tree. Throws std::invalid_argument on bad options.
+PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
+                                        const PoseGraphOptimizerOptions& options = {});
+
+// g2o's chi2 at the graph's poses: sum over constraints of e^T Omega e,
+// scaled by Psi(s)^2 for switched constraints, plus the switch priors'
+// information * (gamma - s)^2. Linear Psi.
+double Chi2(const AnyPoseGraph& graph);
+
+// Removes every constraint whose switch is <= 0.5 or whose id is in
+// `rejected`, and every switch: the graph to hand to a planner.
+AnyPoseGraph DropRejected(const AnyPoseGraph& graph, const std::vector<ClosureDecision>& decisions);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_POSE_GRAPH_OPTIMIZER_H_
