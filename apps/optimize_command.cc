@@ -104,8 +104,13 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--json", o->json,
                 "Print one JSON object (iterations, initial_cost, final_cost, chi2, time_s, "
                 "accepted, rejected, ...)");
+  cmd->add_option("--switch-gate", o->optimizer.switch_gate_probability,
+                  "Switchable: a closure is rejected when its chi2 exceeds the chi2(dof) "
+                  "quantile at this probability (sets each switch prior; no per-dataset tuning)")
+      ->capture_default_str();
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
-                  "Information of each new switch's prior (Xi^-1)")
+                  "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "
+                  "(Vertigo uses 1); 0 = use the gate")
       ->capture_default_str();
   cmd->add_option("--dcs-phi", o->optimizer.dcs_phi, "DCS Phi")->capture_default_str();
   cmd->add_option("--loss-scale", o->optimizer.loss_scale_sigma,

@@ -7,6 +7,7 @@
 #include <string>
 #include <variant>
 
+#include "backend/chi_square.h"
 #include "backend/initialization.h"
 #include "backend/robust_losses.h"
 
@@ -98,12 +99,16 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   std::int64_t next_switch = 0;
   for (const auto& [id, v] : graph.vertices) next_switch = std::max(next_switch, id.value() + 1);
   for (const auto& [id, s] : graph.switches) next_switch = std::max(next_switch, id.value() + 1);
+  const double switch_information =
+      options.switch_prior_information > 0.0
+          ? options.switch_prior_information
+          : ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
   if (switchable) {
     for (auto& c : graph.constraints) {
       if (c.switch_id || !robust(c)) continue;
       const SwitchId id(next_switch++);
       c.switch_id = id;
-      graph.switches.emplace(id, SwitchVariable{id, 1.0, SwitchPrior{1.0, options.switch_prior_information}});
+      graph.switches.emplace(id, SwitchVariable{id, 1.0, SwitchPrior{1.0, switch_information}});
     }
   }
 
@@ -192,8 +197,11 @@ std::optional<RobustMethod> RobustMethodFromString(std::string_view text) {
 }
 
 void Validate(const PoseGraphOptimizerOptions& o) {
-  if (!(o.switch_prior_information > 0.0)) {
-    throw std::invalid_argument("switch_prior_information must be > 0");
+  if (!(o.switch_prior_information >= 0.0)) {
+    throw std::invalid_argument("switch_prior_information must be >= 0 (0: use the gate)");
+  }
+  if (!(o.switch_gate_probability > 0.0 && o.switch_gate_probability < 1.0)) {
+    throw std::invalid_argument("switch_gate_probability must be in (0, 1)");
   }
   if (!(o.dcs_phi > 0.0)) throw std::invalid_argument("dcs_phi must be > 0");
   if (!(o.loss_scale_sigma > 0.0)) throw std::invalid_argument("loss_scale_sigma must be > 0");

@@ -103,5 +103,34 @@ TEST_CASE("catgraph generate-graph writes a graph that info reads back", "[apps]
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("catgraph optimize writes the corrected graph and reports the public keys",
+          "[apps][optimize]") {
+  const auto dir = std::filesystem::temp_directory_path() / "catgraph_optimize_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string graph = (dir / "g.g2o").string(), out = (dir / "o.g2o").string();
+  const std::string report = (dir / "r.json").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "150", "--seed", "5"}).status == 0);
+  const Result r = Run({"optimise", graph, "-o", out, "--json", "--report", report});
+  REQUIRE(r.status == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"iterations", "initial_cost", "final_cost", "chi2", "time_s", "accepted",
+                          "rejected"}) {
+    CHECK(j.contains(key));
+  }
+  CHECK(j.at("final_cost").get<double>() < j.at("initial_cost").get<double>());
+  const auto info = nlohmann::json::parse(Run({"info", out, "--json"}).out);
+  // One switch per loop closure, written with the graph.
+  CHECK(info.at("switches") == info.at("loop_closures"));
+  CHECK(info.at("switchable_edges") == info.at("loop_closures"));
+  std::ifstream report_file(report);
+  const auto full = nlohmann::json::parse(report_file);
+  CHECK(full.at("closures").size() == j.at("accepted").get<std::size_t>() + j.at("rejected").get<std::size_t>());
+  // --drop-rejected writes a graph without switches.
+  REQUIRE(Run({"optimize", graph, "-o", out, "--drop-rejected"}).status == 0);
+  CHECK(nlohmann::json::parse(Run({"info", out, "--json"}).out).at("switches") == 0);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace catgraph

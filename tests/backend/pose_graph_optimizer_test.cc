@@ -1,0 +1,172 @@
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <set>
+
+#include <catch2/catch.hpp>
+
+#include "backend/chi_square.h"
+#include "backend/factor_graph.h"
+#include "backend/factors.h"
+#include "backend/initialization.h"
+#include "backend/io/graph_io.h"
+#include "backend/optimizer.h"
+#include "backend/pose_graph_optimizer.h"
+#include "backend/robust_losses.h"
+#include "simulation/manhattan_world.h"
+#include "tests/test_support.h"
+
+namespace catgraph {
+namespace {
+
+TEST_CASE("chi-square quantiles match the tables", "[backend][chi2]") {
+  CHECK(ChiSquareQuantile(3, 0.99) == Approx(11.3449).epsilon(1e-5));
+  CHECK(ChiSquareQuantile(3, 0.999) == Approx(16.2662).epsilon(1e-5));
+  CHECK(ChiSquareQuantile(6, 0.99) == Approx(16.8119).epsilon(1e-5));
+  CHECK(ChiSquareQuantile(6, 0.999) == Approx(22.4577).epsilon(1e-5));
+  CHECK(ChiSquareQuantile(2, 0.5) == Approx(2.0 * std::log(2.0)).epsilon(1e-9));
+  CHECK_THROWS_AS(ChiSquareQuantile(3, 1.0), std::invalid_argument);
+}
+
+TEST_CASE("the DCS loss is continuous, its derivative is DCS's squared weight", "[backend][dcs]") {
+  const double phi = 2.5;
+  DcsLoss loss(phi);
+  for (double x : {0.1, 1.0, 2.4, 2.5, 2.6, 10.0, 100.0, 1e4}) {
+    double rho[3], lo[3], hi[3];
+    const double h = 1e-6 * std::max(1.0, x);
+    loss.Evaluate(x, rho);
+    loss.Evaluate(x - h, lo);
+    loss.Evaluate(x + h, hi);
+    CHECK(rho[1] == Approx((hi[0] - lo[0]) / (2.0 * h)).epsilon(1e-5));
+    CHECK(rho[1] == Approx(DcsLoss::SquaredWeight(phi, x)));
+    CHECK(rho[1] > 0.0);
+    CHECK(rho[0] <= 3.0 * phi + 1e-12);
+    if (x != phi) CHECK(rho[2] == Approx((hi[1] - lo[1]) / (2.0 * h)).epsilon(1e-4).margin(1e-12));
+  }
+}
+
+TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend][api]") {
+  // Four poses around a 2 m square; exact measurements, perturbed start.
+  const std::vector<Pose2> truth = {{0, 0, 0}, {2, 0, M_PI / 2}, {2, 2, M_PI}, {0, 2, -M_PI / 2}};
+  Values initial;
+  FactorGraph graph;
+  RelativePoseMeasurement<Pose2> z;
+  z.information << 10, 2, 0, 2, 10, 1, 0, 1, 50;
+  for (int k = 0; k < 4; ++k) {
+    initial.Insert(PoseId(k), truth[k] * Pose2(0.2 * k, -0.1 * k, 0.1 * k));
+    z.mean = truth[k].Between(truth[(k + 1) % 4]);
+    graph.Emplace<BetweenFactor<Pose2>>(PoseId(k), PoseId((k + 1) % 4), z);
+  }
+  graph.SetConstant(PoseKey(PoseId(0)));
+  const OptimizationResult result = Optimize(graph, initial);
+  REQUIRE(result.summary.IsUsable());
+  CHECK(result.summary.final_cost < 1e-12);
+  for (int k = 0; k < 4; ++k) {
+    CHECK(testing::ApproxEqual(result.values.AtPose2(PoseId(k)), truth[k], 1e-6));
+  }
+  CHECK_THROWS_AS(initial.AtPose3(PoseId(0)), std::invalid_argument);
+  CHECK_THROWS_AS(initial.AtSwitch(SwitchId(0)), std::out_of_range);
+  FactorGraph dangling;
+  dangling.Emplace<BetweenFactor<Pose2>>(PoseId(0), PoseId(9), z);
+  CHECK_THROWS_AS(Optimize(dangling, initial), std::invalid_argument);
+}
+
+TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][init]") {
+  ManhattanWorldOptions options;
+  options.num_poses = 200;
+  const SimulatedPoseGraph2 sim = SimulateManhattanWorld(options);
+  PoseGraph2 stripped = sim.graph;
+  for (auto& [id, v] : stripped.vertices) v.pose.reset();
+  InitializeBySpanningTree(stripped);
+  for (const auto& [id, v] : sim.graph.vertices) {
+    // The simulator's initial guess is the chained noisy odometry.
+    REQUIRE(testing::ApproxEqual(*stripped.vertices.at(id).pose, *v.pose, 1e-9));
+  }
+}
+
+// Adds `count` false closures between random poses, Vertigo-style.
+std::set<ClosureId> InjectRandomOutliers(PoseGraph2& g, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const int n = static_cast<int>(g.vertices.size());
+  std::uniform_int_distribution<int> pick(0, n - 2);
+  std::normal_distribution<double> xy(0.0, 0.3), th(0.0, 10.0 * M_PI / 180.0);
+  std::set<ClosureId> injected;
+  const auto information = g.constraints.back().measurement.information;
+  for (int k = 0; k < count; ++k) {
+    int a = pick(rng), b = pick(rng);
+    while (a == b) b = pick(rng);
+    if (a > b) std::swap(a, b);
+    if (b == a + 1) b = a + 2;
+    Constraint<Pose2> c;
+    c.id = g.NextClosureId();
+    c.from = PoseId(a);
+    c.to = PoseId(b);
+    c.measurement = {Pose2(xy(rng), xy(rng), th(rng)), information};
+    c.kind = ClosureKind::kInjected;
+    g.constraints.push_back(c);
+    injected.insert(c.id);
+  }
+  return injected;
+}
+
+TEST_CASE("switchable constraints with the default gate reject injected closures and keep "
+          "true ones on a graph with correct information",
+          "[backend][switchable]") {
+  ManhattanWorldOptions options;
+  options.num_poses = 500;
+  options.seed = 9;
+  SimulatedPoseGraph2 sim = SimulateManhattanWorld(options);
+  const std::set<ClosureId> injected = InjectRandomOutliers(sim.graph, 50, 3);
+  const PoseGraphOptimization result = OptimizePoseGraph(sim.graph);
+  REQUIRE(result.summary.IsUsable());
+  std::size_t false_accepted = 0, true_rejected = 0;
+  for (const auto& d : result.closures) {
+    if (injected.contains(d.id)) false_accepted += d.accepted;
+    else true_rejected += !d.accepted;
+  }
+  CHECK(false_accepted == 0);
+  // The 0.999 gate rejects about 1 in 1000 true closures by construction.
+  const std::size_t true_closures = result.closures.size() - injected.size();
+  CHECK(true_rejected <= true_closures / 200);
+  // Vertigo's xi = 1 rejects most true closures of such a graph.
+  PoseGraphOptimizerOptions vertigo;
+  vertigo.switch_prior_information = 1.0;
+  const PoseGraphOptimization fixed = OptimizePoseGraph(sim.graph, vertigo);
+  CHECK(fixed.rejected > true_closures / 2);
+}
+
+struct ReferenceChi2 {
+  const char* path;
+  double chi2;
+};
+
+TEST_CASE("plain least squares reaches the reference chi2 of the shared graphs",
+          "[backend][shared]") {
+  const std::filesystem::path root = testing::SharedPoseGraphs();
+  if (root.empty()) {
+    WARN("skipped: shared pose graphs not found");
+    return;
+  }
+  // ../shared/docs/robust-backend-notes.md, section 3.
+  const std::vector<ReferenceChi2> references = {
+      {"vertigo/manhattan/originalDataset/g2o/manhattanOlson3500.g2o", 146.08},
+      {"vertigo/manhattan/originalDataset/Olson/manhattanOlson3500.g2o", 146.08},
+      {"vertigo/intel/originalDataset/intel.g2o", 546.46},
+      {"vertigo/ring/originalDataset/ring.g2o", 11.16},
+      {"carlone/input_M3500_g2o.g2o", 137.91},
+  };
+  PoseGraphOptimizerOptions options;
+  options.method = RobustMethod::kNone;
+  for (const auto& ref : references) {
+    SECTION(ref.path) {
+      const auto result = OptimizePoseGraph(ReadGraphFile(root / ref.path).graph, options);
+      REQUIRE(result.summary.IsUsable());
+      CHECK(result.chi2 == Approx(ref.chi2).epsilon(1e-4).margin(0.005));
+      CHECK(Chi2(result.graph) == Approx(result.chi2));
+      CHECK(result.chi2 == Approx(4.0 * result.summary.final_cost / 2.0).epsilon(1e-9));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace catgraph
