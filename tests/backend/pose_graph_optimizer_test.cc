@@ -14,6 +14,7 @@
 #include "backend/pose_graph_optimizer.h"
 #include "backend/robust_losses.h"
 #include "simulation/manhattan_world.h"
+#include "simulation/outlier_injection.h"
 #include "tests/test_support.h"
 
 namespace catgraph {
@@ -84,31 +85,6 @@ TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][ini
   }
 }
 
-// Adds `count` false closures between random poses, Vertigo-style.
-std::set<ClosureId> InjectRandomOutliers(PoseGraph2& g, int count, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  const int n = static_cast<int>(g.vertices.size());
-  std::uniform_int_distribution<int> pick(0, n - 2);
-  std::normal_distribution<double> xy(0.0, 0.3), th(0.0, 10.0 * M_PI / 180.0);
-  std::set<ClosureId> injected;
-  const auto information = g.constraints.back().measurement.information;
-  for (int k = 0; k < count; ++k) {
-    int a = pick(rng), b = pick(rng);
-    while (a == b) b = pick(rng);
-    if (a > b) std::swap(a, b);
-    if (b == a + 1) b = a + 2;
-    Constraint<Pose2> c;
-    c.id = g.NextClosureId();
-    c.from = PoseId(a);
-    c.to = PoseId(b);
-    c.measurement = {Pose2(xy(rng), xy(rng), th(rng)), information};
-    c.kind = ClosureKind::kInjected;
-    g.constraints.push_back(c);
-    injected.insert(c.id);
-  }
-  return injected;
-}
-
 TEST_CASE("switchable constraints with the default gate reject injected closures and keep "
           "true ones on a graph with correct information",
           "[backend][switchable]") {
@@ -116,7 +92,8 @@ TEST_CASE("switchable constraints with the default gate reject injected closures
   options.num_poses = 500;
   options.seed = 9;
   SimulatedPoseGraph2 sim = SimulateManhattanWorld(options);
-  const std::set<ClosureId> injected = InjectRandomOutliers(sim.graph, 50, 3);
+  const std::vector<ClosureId> ids = InjectRandomOutliers(sim.graph, 50, 3);
+  const std::set<ClosureId> injected(ids.begin(), ids.end());
   const PoseGraphOptimization result = OptimizePoseGraph(sim.graph);
   REQUIRE(result.summary.IsUsable());
   std::size_t false_accepted = 0, true_rejected = 0;
