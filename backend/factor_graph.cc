@@ -4,13 +4,9 @@
 #include <string>
 
 namespace catgraph {
-namespace {
-
-std::string Describe(Key key) {
+std::string ToString(Key key) {
   return std::string(key.type == KeyType::kPose ? "pose " : "switch ") + std::to_string(key.id);
 }
-
-}  // namespace
 
 void Values::Insert(PoseId id, const Pose2& pose) {
   Entry e{VariableKind::kPose2, {pose.x(), pose.y(), pose.theta()}};
@@ -30,9 +26,9 @@ void Values::Insert(SwitchId id, double value) {
 
 const Values::Entry& Values::At(Key key, VariableKind kind) const {
   auto it = entries_.find(key);
-  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + Describe(key));
+  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
   if (it->second.kind != kind) {
-    throw std::invalid_argument("Values: " + Describe(key) + " holds another kind of variable");
+    throw std::invalid_argument("Values: " + ToString(key) + " holds another kind of variable");
   }
   return it->second;
 }
@@ -53,13 +49,13 @@ double Values::AtSwitch(SwitchId id) const {
 
 VariableKind Values::KindOf(Key key) const {
   auto it = entries_.find(key);
-  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + Describe(key));
+  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
   return it->second.kind;
 }
 
 double* Values::MutableBlock(Key key) {
   auto it = entries_.find(key);
-  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + Describe(key));
+  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
   return it->second.data.data();
 }
 

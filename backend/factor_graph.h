@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -47,6 +48,8 @@ struct Key {
 };
 inline Key PoseKey(PoseId id) { return {KeyType::kPose, id.value()}; }
 inline Key SwitchKey(SwitchId id) { return {KeyType::kSwitch, id.value()}; }
+// "pose 12", "switch 3000": for error messages.
+std::string ToString(Key key);
 
 enum class VariableKind { kPose2, kPose3, kSwitch };
 

@@ -16,10 +16,6 @@ void Require(bool ok, const char* field) {
   if (!ok) throw std::invalid_argument(std::string("OptimizerOptions::") + field + " is out of range");
 }
 
-std::string Describe(Key key) {
-  return std::string(key.type == KeyType::kPose ? "pose " : "switch ") + std::to_string(key.id);
-}
-
 }  // namespace
 
 void Validate(const OptimizerOptions& o) {
@@ -70,7 +66,7 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
     std::vector<double*> blocks;
     for (const Key key : factor->keys()) {
       if (!values.Contains(key)) {
-        throw std::invalid_argument("Optimize: a factor uses " + Describe(key) +
+        throw std::invalid_argument("Optimize: a factor uses " + ToString(key) +
                                     ", which has no initial value");
       }
       blocks.push_back(values.MutableBlock(key));

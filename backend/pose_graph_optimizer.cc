@@ -69,8 +69,9 @@ RobustLoss LossFor(const PoseGraphOptimizerOptions& o) {
   }
 }
 
-// rho'(chi2) for the loss, i.e. the weight an edge of this chi2 keeps.
-double RobustWeight(const RobustLoss& loss, double chi2) {
+// rho'(chi2): the IRLS weight on the edge's chi2. Its square root scales the
+// residual, as a switch does.
+double LossDerivative(const RobustLoss& loss, double chi2) {
   switch (loss.type) {
     case RobustLoss::Type::kNone: return 1.0;
     case RobustLoss::Type::kDcs: return DcsLoss::SquaredWeight(loss.scale, chi2);
@@ -154,7 +155,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       const double s = graph.switches.at(*c.switch_id).value;
       d.weight = options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
     } else if (robust(c)) {
-      d.weight = RobustWeight(loss, EdgeChi2(graph, c));
+      d.weight = std::sqrt(LossDerivative(loss, EdgeChi2(graph, c)));
     }
     d.accepted = d.weight > 0.5;
     (d.accepted ? out.accepted : out.rejected) += 1;

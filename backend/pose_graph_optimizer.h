@@ -59,7 +59,9 @@ struct ClosureDecision {
   ClosureId id;
   PoseId from, to;
   ClosureKind kind = ClosureKind::kUnknown;
-  double weight = 1.0;  // the switch Psi(s), or the robust weight rho'(chi2); 1 for `none`
+  // What the residual is scaled by: the switch Psi(s), or sqrt(rho'(chi2))
+  // for a robust loss (DCS: its scale min(1, 2 Phi / (Phi + chi2))); 1 for `none`.
+  double weight = 1.0;
   bool accepted = true;  // weight > 0.5
 };
 
