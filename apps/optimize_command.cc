@@ -18,6 +18,7 @@ struct OptimizeOptions {
   std::string output;
   std::string format = "auto";
   std::string method = "switchable";
+  std::string init = "file";
   std::string report;
   bool drop_rejected = false;
   bool json = false;
@@ -30,6 +31,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["input"] = o.input;
   j["output"] = o.output;
   j["method"] = o.method;
+  j["init"] = o.init;
   j["termination"] = r.summary.IsUsable() ? "usable" : "failed";
   j["message"] = r.summary.message;
   j["iterations"] = r.summary.iterations;
@@ -58,6 +60,7 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
   read_options.format = *GraphFormatFromString(options.format);
   const GraphFile file = ReadGraphFile(options.input, read_options);
   options.optimizer.method = *RobustMethodFromString(options.method);
+  options.optimizer.initial_guess = *InitialGuessFromString(options.init);
   const PoseGraphOptimization result = OptimizePoseGraph(file.graph, options.optimizer);
   if (!result.summary.IsUsable()) {
     throw std::runtime_error("the solver failed: " + result.summary.message);
@@ -96,6 +99,11 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--method", o->method, "Robust method for loop closures")
       ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber"}))
+      ->capture_default_str();
+  cmd->add_option("--init", o->init,
+                  "Initial guess: the file's poses (missing ones chained along a spanning "
+                  "tree), spanning-tree for all, or chordal (rotation-first)")
+      ->check(CLI::IsMember({"file", "spanning-tree", "chordal"}))
       ->capture_default_str();
   cmd->add_option("--report", o->report,
                   "Write a JSON report with every loop closure's weight and decision");

@@ -1,8 +1,15 @@
 #include "backend/initialization.h"
 
+#include <cmath>
 #include <deque>
+#include <stdexcept>
 #include <unordered_map>
+#include <utility>
 #include <vector>
+
+#include <Eigen/SVD>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
 
 namespace catgraph {
 namespace {
@@ -51,5 +58,143 @@ void Initialize(PoseGraph<PoseT>& graph, bool overwrite) {
 
 void InitializeBySpanningTree(PoseGraph2& graph, bool overwrite) { Initialize(graph, overwrite); }
 void InitializeBySpanningTree(PoseGraph3& graph, bool overwrite) { Initialize(graph, overwrite); }
+
+}  // namespace catgraph
+
+// ---------------------------------------------------------------------------
+// Chordal initialisation.
+
+namespace catgraph {
+namespace {
+
+template <int D>
+using RotationMatrix = Eigen::Matrix<double, D, D>;
+
+RotationMatrix<2> RotationOf(const Pose2& p) { return p.rotation(); }
+RotationMatrix<3> RotationOf(const Pose3& p) { return p.rotation().toRotationMatrix(); }
+Eigen::Vector2d TranslationOf(const Pose2& p) { return p.translation(); }
+Eigen::Vector3d TranslationOf(const Pose3& p) { return p.translation(); }
+Pose2 MakePose(const RotationMatrix<2>& r, const Eigen::Vector2d& t) {
+  return {t.x(), t.y(), std::atan2(r(1, 0), r(0, 0))};
+}
+Pose3 MakePose(const RotationMatrix<3>& r, const Eigen::Vector3d& t) {
+  return {t, Eigen::Quaterniond(r)};
+}
+
+// SE-Sync's weights from the information matrix: tau = d / trace(Sigma_t),
+// kappa = I_theta (2D) or 3 / (2 trace(Sigma_R)) (3D).
+template <int N>
+std::pair<double, double> KappaTau(const Eigen::Matrix<double, N, N>& information) {
+  constexpr int kD = N == 3 ? 2 : 3;
+  const Eigen::Matrix<double, kD, kD> sigma_t =
+      information.template topLeftCorner<kD, kD>().inverse();
+  const double tau = kD / sigma_t.trace();
+  if constexpr (N == 3) {
+    return {information(2, 2), tau};
+  } else {
+    const Eigen::Matrix3d sigma_r = information.template bottomRightCorner<3, 3>().inverse();
+    return {3.0 / (2.0 * sigma_r.trace()), tau};
+  }
+}
+
+template <int D>
+RotationMatrix<D> ProjectToRotation(const RotationMatrix<D>& m) {
+  Eigen::JacobiSVD<RotationMatrix<D>> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  RotationMatrix<D> s = RotationMatrix<D>::Identity();
+  s(D - 1, D - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixU() * s * svd.matrixV().transpose();
+}
+
+// Solves min sum_rows (a_row . x - b_row)^2 through the normal equations.
+Eigen::VectorXd SolveLeastSquares(int unknowns, const std::vector<Eigen::Triplet<double>>& a,
+                                  int rows, const Eigen::VectorXd& b) {
+  Eigen::SparseMatrix<double> m(rows, unknowns);
+  m.setFromTriplets(a.begin(), a.end());
+  const Eigen::SparseMatrix<double> normal = m.transpose() * m;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) {
+    throw std::invalid_argument("chordal initialisation: the graph is not connected");
+  }
+  return solver.solve(m.transpose() * b);
+}
+
+template <typename PoseT>
+void Chordal(PoseGraph<PoseT>& graph) {
+  constexpr int kD = PoseGraph<PoseT>::kDimension;
+  const PoseId root = graph.vertices.begin()->first;
+  std::unordered_map<PoseId, int> index;  // root excluded: it is the anchor
+  for (const auto& [id, v] : graph.vertices) {
+    if (id != root) index.emplace(id, static_cast<int>(index.size()));
+  }
+  const int n = static_cast<int>(index.size());
+  // Rotations: unknowns are the rows of each R (D*D per vertex). For row r,
+  // R_j[r,:] = R_i[r,:] R_ij, i.e. R_ij^T x_{i,r} - x_{j,r} = 0.
+  std::vector<Eigen::Triplet<double>> a;
+  std::vector<double> b;
+  int row = 0;
+  auto unknown = [&](PoseId id, int r, int c) { return index.at(id) * kD * kD + r * kD + c; };
+  for (const auto& e : graph.constraints) {
+    const double w = std::sqrt(KappaTau(e.measurement.information).first);
+    const RotationMatrix<kD> rt = RotationOf(e.measurement.mean).transpose();
+    for (int r = 0; r < kD; ++r) {
+      for (int k = 0; k < kD; ++k, ++row) {
+        // sum_c rt(k, c) x_{i,r,c} - x_{j,r,k} = 0, with R_root = I known.
+        double rhs = 0.0;
+        for (int c = 0; c < kD; ++c) {
+          if (e.from == root) {
+            rhs -= w * rt(k, c) * (r == c ? 1.0 : 0.0);
+          } else {
+            a.emplace_back(row, unknown(e.from, r, c), w * rt(k, c));
+          }
+        }
+        if (e.to == root) {
+          rhs += w * (r == k ? 1.0 : 0.0);
+        } else {
+          a.emplace_back(row, unknown(e.to, r, k), -w);
+        }
+        b.push_back(rhs);
+      }
+    }
+  }
+  const Eigen::VectorXd x =
+      SolveLeastSquares(n * kD * kD, a, row, Eigen::Map<Eigen::VectorXd>(b.data(), row));
+  std::unordered_map<PoseId, RotationMatrix<kD>> rotations;
+  rotations.emplace(root, RotationMatrix<kD>::Identity());
+  for (const auto& [id, k] : index) {
+    RotationMatrix<kD> m;
+    for (int r = 0; r < kD; ++r) {
+      for (int c = 0; c < kD; ++c) m(r, c) = x(k * kD * kD + r * kD + c);
+    }
+    rotations.emplace(id, ProjectToRotation<kD>(m));
+  }
+  // Translations: t_j - t_i = R_i t_ij, t_root = 0.
+  a.clear();
+  b.clear();
+  row = 0;
+  for (const auto& e : graph.constraints) {
+    const double w = std::sqrt(KappaTau(e.measurement.information).second);
+    const Eigen::Matrix<double, kD, 1> rhs =
+        w * rotations.at(e.from) * TranslationOf(e.measurement.mean);
+    for (int k = 0; k < kD; ++k, ++row) {
+      if (e.to != root) a.emplace_back(row, index.at(e.to) * kD + k, w);
+      if (e.from != root) a.emplace_back(row, index.at(e.from) * kD + k, -w);
+      b.push_back(rhs(k));
+    }
+  }
+  const Eigen::VectorXd t =
+      SolveLeastSquares(n * kD, a, row, Eigen::Map<Eigen::VectorXd>(b.data(), row));
+  const auto& root_vertex = graph.vertices.at(root);
+  const PoseT anchor = root_vertex.pose ? *root_vertex.pose : PoseT::Identity();
+  for (auto& [id, v] : graph.vertices) {
+    Eigen::Matrix<double, kD, 1> translation = Eigen::Matrix<double, kD, 1>::Zero();
+    if (id != root) translation = t.template segment<kD>(index.at(id) * kD);
+    v.pose = anchor * MakePose(rotations.at(id), translation);
+  }
+}
+
+}  // namespace
+
+void InitializeChordal(PoseGraph2& graph) { Chordal(graph); }
+void InitializeChordal(PoseGraph3& graph) { Chordal(graph); }
 
 }  // namespace catgraph

@@ -87,9 +87,19 @@ double LossDerivative(const RobustLoss& loss, double chi2) {
   return 1.0;
 }
 
+constexpr std::array<std::pair<InitialGuess, std::string_view>, 3> kInitialGuessNames = {{
+    {InitialGuess::kFile, "file"},
+    {InitialGuess::kSpanningTree, "spanning-tree"},
+    {InitialGuess::kChordal, "chordal"},
+}};
+
 template <typename PoseT>
 PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
-  InitializeBySpanningTree(graph);
+  switch (options.initial_guess) {
+    case InitialGuess::kFile: InitializeBySpanningTree(graph); break;
+    case InitialGuess::kSpanningTree: InitializeBySpanningTree(graph, /*overwrite=*/true); break;
+    case InitialGuess::kChordal: InitializeChordal(graph); break;
+  }
   const bool switchable = options.method == RobustMethod::kSwitchable;
   const RobustLoss loss = LossFor(options);
   auto robust = [&](const Constraint<PoseT>& c) {
@@ -193,6 +203,20 @@ std::string_view ToString(RobustMethod method) {
 std::optional<RobustMethod> RobustMethodFromString(std::string_view text) {
   for (const auto& [m, name] : kMethodNames) {
     if (name == text) return m;
+  }
+  return std::nullopt;
+}
+
+std::string_view ToString(InitialGuess guess) {
+  for (const auto& [g, name] : kInitialGuessNames) {
+    if (g == guess) return name;
+  }
+  return "file";
+}
+
+std::optional<InitialGuess> InitialGuessFromString(std::string_view text) {
+  for (const auto& [g, name] : kInitialGuessNames) {
+    if (name == text) return g;
   }
   return std::nullopt;
 }

@@ -30,8 +30,18 @@ enum class RobustMethod {
 std::string_view ToString(RobustMethod method);
 std::optional<RobustMethod> RobustMethodFromString(std::string_view text);
 
+enum class InitialGuess {
+  kFile,          // the file's poses; missing ones chained along a spanning tree
+  kSpanningTree,  // every pose chained along a spanning tree, odometry first
+  kChordal,       // chordal (rotation-first) initialisation of every pose
+};
+
+std::string_view ToString(InitialGuess guess);
+std::optional<InitialGuess> InitialGuessFromString(std::string_view text);
+
 struct PoseGraphOptimizerOptions {
   RobustMethod method = RobustMethod::kSwitchable;
+  InitialGuess initial_guess = InitialGuess::kFile;
   SwitchFunction switch_function = SwitchFunction::kLinear;
   // The default needs no per-dataset tuning. For one closure with
   // chi2 = e^T Omega e, the switchable objective s^2 chi2 + xi (1 - s)^2 is
@@ -76,8 +86,8 @@ struct PoseGraphOptimization {
   double chi2 = 0.0;  // g2o's chi2 of `graph` (see Chi2())
 };
 
-// Vertices without an initial pose are first initialised by chaining
-// odometry along a spanning tree. Throws std::invalid_argument on bad options.
+// Poses are first initialised as `options.initial_guess` says. Throws
+// std::invalid_argument on bad options.
 PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
                                         const PoseGraphOptimizerOptions& options = {});
 
