@@ -6,6 +6,7 @@
 #define CATGRAPH_APPS_COMMANDS_H_
 
 #include <ostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -14,6 +15,9 @@ namespace catgraph {
 void AddInfoCommand(CLI::App& app, std::ostream& out);
 void AddGenerateGraphCommand(CLI::App& app, std::ostream& out);
 void AddOptimizeCommand(CLI::App& app, std::ostream& out);
+
+// The --format option every graph-reading command takes.
+void AddGraphFormatOption(CLI::App& command, std::string& format);
 
 // Builds the whole command-line interface, writing reports to `out`.
 void AddAllCommands(CLI::App& app, std::ostream& out);

@@ -93,10 +93,7 @@ void AddInfoCommand(CLI::App& app, std::ostream& out) {
               "odometry vs loop closures, switches, connectivity, information-matrix warnings.");
   cmd->add_option("file", options->file, "Pose-graph file (g2o 2D/3D, TORO .graph, iSAM)")
       ->required();
-  cmd->add_option("--format", options->format,
-                  "Input format; auto decides from the tags (and .graph for TORO)")
-      ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
-      ->capture_default_str();
+  AddGraphFormatOption(*cmd, options->format);
   cmd->add_flag("--json", options->json,
                 "Print one JSON object (keys: dimension, vertices, edges, odometry_edges, "
                 "loop_closures, switches, connected, ...)");

@@ -94,9 +94,7 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->alias("optimise");
   cmd->add_option("input", o->input, "Pose-graph file (g2o, TORO, iSAM)")->required();
   cmd->add_option("-o,--output", o->output, "Corrected graph (g2o)")->required();
-  cmd->add_option("--format", o->format, "Input format")
-      ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
-      ->capture_default_str();
+  AddGraphFormatOption(*cmd, o->format);
   cmd->add_option("--method", o->method, "Robust method for loop closures")
       ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber"}))
       ->capture_default_str();

@@ -6,6 +6,12 @@
 
 namespace catgraph {
 
+void AddGraphFormatOption(CLI::App& command, std::string& format) {
+  command.add_option("--format", format, "Input format; auto decides from the tags (and .graph for TORO)")
+      ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
+      ->capture_default_str();
+}
+
 void AddAllCommands(CLI::App& app, std::ostream& out) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "catgraph 0.1.0");

@@ -8,13 +8,14 @@
 #include <variant>
 
 #include "backend/chi_square.h"
+#include "backend/graph/name_table.h"
 #include "backend/initialization.h"
 #include "backend/robust_losses.h"
 
 namespace catgraph {
 namespace {
 
-constexpr std::array<std::pair<RobustMethod, std::string_view>, 5> kMethodNames = {{
+constexpr NameTable<RobustMethod, 5> kMethodNames = {{
     {RobustMethod::kNone, "none"},
     {RobustMethod::kSwitchable, "switchable"},
     {RobustMethod::kDcs, "dcs"},
@@ -87,7 +88,7 @@ double LossDerivative(const RobustLoss& loss, double chi2) {
   return 1.0;
 }
 
-constexpr std::array<std::pair<InitialGuess, std::string_view>, 3> kInitialGuessNames = {{
+constexpr NameTable<InitialGuess, 3> kInitialGuessNames = {{
     {InitialGuess::kFile, "file"},
     {InitialGuess::kSpanningTree, "spanning-tree"},
     {InitialGuess::kChordal, "chordal"},
@@ -193,32 +194,16 @@ PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>
 
 }  // namespace
 
-std::string_view ToString(RobustMethod method) {
-  for (const auto& [m, name] : kMethodNames) {
-    if (m == method) return name;
-  }
-  return "none";
-}
+std::string_view ToString(RobustMethod method) { return NameOf(kMethodNames, method); }
 
 std::optional<RobustMethod> RobustMethodFromString(std::string_view text) {
-  for (const auto& [m, name] : kMethodNames) {
-    if (name == text) return m;
-  }
-  return std::nullopt;
+  return ValueOf(kMethodNames, text);
 }
 
-std::string_view ToString(InitialGuess guess) {
-  for (const auto& [g, name] : kInitialGuessNames) {
-    if (g == guess) return name;
-  }
-  return "file";
-}
+std::string_view ToString(InitialGuess guess) { return NameOf(kInitialGuessNames, guess); }
 
 std::optional<InitialGuess> InitialGuessFromString(std::string_view text) {
-  for (const auto& [g, name] : kInitialGuessNames) {
-    if (name == text) return g;
-  }
-  return std::nullopt;
+  return ValueOf(kInitialGuessNames, text);
 }
 
 void Validate(const PoseGraphOptimizerOptions& o) {

@@ -15,6 +15,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "backend/graph/name_table.h"
 #include "backend/graph/pose_graph.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
@@ -22,6 +23,13 @@
 
 namespace catgraph {
 namespace {
+
+constexpr NameTable<GraphFormat, 4> kGraphFormatNames = {{
+    {GraphFormat::kAuto, "auto"},
+    {GraphFormat::kG2o, "g2o"},
+    {GraphFormat::kToro, "toro"},
+    {GraphFormat::kIsam, "isam"},
+}};
 
 constexpr std::string_view kWhitespace = " \t\r\v\f";
 
@@ -489,22 +497,10 @@ PoseGraph<PoseT> ParseLines(const std::string& name, const std::vector<PendingLi
 
 }  // namespace
 
-std::string_view ToString(GraphFormat format) {
-  switch (format) {
-    case GraphFormat::kAuto: return "auto";
-    case GraphFormat::kG2o: return "g2o";
-    case GraphFormat::kToro: return "toro";
-    case GraphFormat::kIsam: return "isam";
-  }
-  return "auto";
-}
+std::string_view ToString(GraphFormat format) { return NameOf(kGraphFormatNames, format); }
 
 std::optional<GraphFormat> GraphFormatFromString(std::string_view text) {
-  for (GraphFormat f : {GraphFormat::kAuto, GraphFormat::kG2o, GraphFormat::kToro,
-                        GraphFormat::kIsam}) {
-    if (ToString(f) == text) return f;
-  }
-  return std::nullopt;
+  return ValueOf(kGraphFormatNames, text);
 }
 
 GraphFile ReadGraph(std::istream& in, const std::string& name, const ReadGraphOptions& options) {
