@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -154,6 +155,68 @@ class SwitchableRelativePoseCost {
   PoseT measurement_;
   SqrtInformation sqrt_information_;
   SwitchFunction function_;
+};
+
+// SE-Sync's chordal cost (Rosen et al., IJRR 2019):
+//   r = [ sqrt(kappa) vec(R_j - R_i R_z) ; sqrt(tau) (t_j - t_i - R_i t_z) ]
+// so that sum |r|^2 is SE-Sync's objective F.
+template <typename T>
+Eigen::Matrix<T, 2, 2> RotationOfParameters2(const T* pose) {
+  const T c = ceres::cos(pose[2]), s = ceres::sin(pose[2]);
+  Eigen::Matrix<T, 2, 2> r;
+  r << c, -s, s, c;
+  return r;
+}
+
+template <typename PoseT>
+class ChordalRelativePoseCost {
+ public:
+  static constexpr int kD = std::is_same_v<PoseT, Pose2> ? 2 : 3;
+  static constexpr int kResiduals = kD * kD + kD;
+  static constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
+
+  ChordalRelativePoseCost(const PoseT& measurement, const ChordalWeights& weights)
+      : measurement_(measurement), weights_(weights) {}
+
+  template <typename T>
+  bool operator()(const T* pose_i, const T* pose_j, T* residuals) const {
+    Eigen::Matrix<T, kD, kD> r_i, r_j;
+    Eigen::Matrix<T, kD, 1> t_i, t_j;
+    Eigen::Matrix<double, kD, kD> r_z;
+    Eigen::Matrix<double, kD, 1> t_z;
+    if constexpr (kD == 2) {
+      r_i = RotationOfParameters2(pose_i);
+      r_j = RotationOfParameters2(pose_j);
+      t_i << pose_i[0], pose_i[1];
+      t_j << pose_j[0], pose_j[1];
+      r_z = measurement_.rotation();
+      t_z = measurement_.translation();
+    } else {
+      r_i = Eigen::Map<const Eigen::Quaternion<T>>(pose_i + 3).toRotationMatrix();
+      r_j = Eigen::Map<const Eigen::Quaternion<T>>(pose_j + 3).toRotationMatrix();
+      t_i = Eigen::Map<const Eigen::Matrix<T, 3, 1>>(pose_i);
+      t_j = Eigen::Map<const Eigen::Matrix<T, 3, 1>>(pose_j);
+      r_z = measurement_.rotation().toRotationMatrix();
+      t_z = measurement_.translation();
+    }
+    const Eigen::Matrix<T, kD, kD> dr = r_j - r_i * r_z.template cast<T>();
+    const Eigen::Matrix<T, kD, 1> dt = t_j - t_i - r_i * t_z.template cast<T>();
+    const T sqrt_kappa(std::sqrt(weights_.kappa)), sqrt_tau(std::sqrt(weights_.tau));
+    for (int c = 0; c < kD; ++c) {
+      for (int r = 0; r < kD; ++r) residuals[c * kD + r] = sqrt_kappa * dr(r, c);
+    }
+    for (int k = 0; k < kD; ++k) residuals[kD * kD + k] = sqrt_tau * dt(k);
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const PoseT& measurement, const ChordalWeights& weights) {
+    return new ceres::AutoDiffCostFunction<ChordalRelativePoseCost, kResiduals, kP, kP>(
+        new ChordalRelativePoseCost(measurement, weights));
+  }
+
+ private:
+  PoseT measurement_;
+  ChordalWeights weights_;
 };
 
 // Switch prior: r = sqrt(information) (gamma - s).

@@ -31,15 +31,33 @@ Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& i
 template Eigen::Matrix<double, 3, 3> SqrtInformation<3>(const Eigen::Matrix<double, 3, 3>&);
 template Eigen::Matrix<double, 6, 6> SqrtInformation<6>(const Eigen::Matrix<double, 6, 6>&);
 
+template <int N>
+ChordalWeights ChordalWeightsOf(const Eigen::Matrix<double, N, N>& information) {
+  constexpr int kD = N == 3 ? 2 : 3;
+  const Eigen::Matrix<double, kD, kD> sigma_t =
+      information.template topLeftCorner<kD, kD>().inverse();
+  const double tau = kD / sigma_t.trace();
+  if constexpr (N == 3) {
+    return {information(2, 2), tau};
+  } else {
+    const Eigen::Matrix3d sigma_r = information.template bottomRightCorner<3, 3>().inverse();
+    return {3.0 / (2.0 * sigma_r.trace()), tau};
+  }
+}
+template ChordalWeights ChordalWeightsOf<3>(const Eigen::Matrix<double, 3, 3>&);
+template ChordalWeights ChordalWeightsOf<6>(const Eigen::Matrix<double, 6, 6>&);
+
 template <typename PoseT>
 BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
                                     const RelativePoseMeasurement<PoseT>& measurement,
-                                    RobustLoss loss)
+                                    RobustLoss loss, RelativePoseCostType cost)
     : from_(from),
       to_(to),
       mean_(measurement.mean),
       sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
-      loss_(loss) {
+      chordal_weights_(ChordalWeightsOf<PoseT::kTangentDim>(measurement.information)),
+      loss_(loss),
+      cost_(cost) {
   if (loss.type != RobustLoss::Type::kNone && !(loss.scale > 0.0)) {
     throw std::invalid_argument("BetweenFactor: robust loss scale must be > 0, got " +
                                 std::to_string(loss.scale));
@@ -48,6 +66,10 @@ BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
 
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> BetweenFactor<PoseT>::NewCostFunction() const {
+  if (cost_ == RelativePoseCostType::kChordal) {
+    return std::unique_ptr<ceres::CostFunction>(
+        ChordalRelativePoseCost<PoseT>::Create(mean_, chordal_weights_));
+  }
   return std::unique_ptr<ceres::CostFunction>(
       RelativePoseCost<PoseT>::Create(mean_, sqrt_information_));
 }

@@ -33,12 +33,29 @@ struct RobustLoss {
 template <int N>
 Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& information);
 
-// e = g2o's error of Z^-1 * X_from^-1 * X_to (cost_functors.h).
+// SE-Sync's isotropic weights of a measurement (robust-backend-notes.md §3):
+// tau = d / trace(Sigma_t); kappa = I_theta_theta (2D) or
+// 3 / (2 trace(Sigma_R)) (3D), Sigma the inverses of the information blocks.
+struct ChordalWeights {
+  double kappa = 1.0;
+  double tau = 1.0;
+};
+template <int N>
+ChordalWeights ChordalWeightsOf(const Eigen::Matrix<double, N, N>& information);
+
+// Which error a relative-pose factor minimises.
+enum class RelativePoseCostType {
+  kG2o,      // g2o's error, weighted by the full information (the default)
+  kChordal,  // SE-Sync's chordal cost: kappa |R_j - R_i R_ij|_F^2 + tau |t_j - t_i - R_i t_ij|^2
+};
+
+// e = g2o's error of Z^-1 * X_from^-1 * X_to (cost_functors.h), or the
+// chordal residual when `cost` says so.
 template <typename PoseT>
 class BetweenFactor : public Factor {
  public:
   BetweenFactor(PoseId from, PoseId to, const RelativePoseMeasurement<PoseT>& measurement,
-                RobustLoss loss = {});
+                RobustLoss loss = {}, RelativePoseCostType cost = RelativePoseCostType::kG2o);
   std::vector<Key> keys() const override { return {PoseKey(from_), PoseKey(to_)}; }
   std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
   std::unique_ptr<ceres::LossFunction> NewLossFunction() const override;
@@ -47,7 +64,9 @@ class BetweenFactor : public Factor {
   PoseId from_, to_;
   PoseT mean_;
   Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
+  ChordalWeights chordal_weights_;
   RobustLoss loss_;
+  RelativePoseCostType cost_;
 };
 
 // r = Psi(s) U e (Suenderhauf & Protzel 2012).

@@ -11,6 +11,8 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
+#include "backend/factors.h"
+
 namespace catgraph {
 namespace {
 
@@ -81,22 +83,6 @@ Pose3 MakePose(const RotationMatrix<3>& r, const Eigen::Vector3d& t) {
   return {t, Eigen::Quaterniond(r)};
 }
 
-// SE-Sync's weights from the information matrix: tau = d / trace(Sigma_t),
-// kappa = I_theta (2D) or 3 / (2 trace(Sigma_R)) (3D).
-template <int N>
-std::pair<double, double> KappaTau(const Eigen::Matrix<double, N, N>& information) {
-  constexpr int kD = N == 3 ? 2 : 3;
-  const Eigen::Matrix<double, kD, kD> sigma_t =
-      information.template topLeftCorner<kD, kD>().inverse();
-  const double tau = kD / sigma_t.trace();
-  if constexpr (N == 3) {
-    return {information(2, 2), tau};
-  } else {
-    const Eigen::Matrix3d sigma_r = information.template bottomRightCorner<3, 3>().inverse();
-    return {3.0 / (2.0 * sigma_r.trace()), tau};
-  }
-}
-
 template <int D>
 RotationMatrix<D> ProjectToRotation(const RotationMatrix<D>& m) {
   Eigen::JacobiSVD<RotationMatrix<D>> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -134,7 +120,7 @@ void Chordal(PoseGraph<PoseT>& graph) {
   int row = 0;
   auto unknown = [&](PoseId id, int r, int c) { return index.at(id) * kD * kD + r * kD + c; };
   for (const auto& e : graph.constraints) {
-    const double w = std::sqrt(KappaTau(e.measurement.information).first);
+    const double w = std::sqrt(ChordalWeightsOf(e.measurement.information).kappa);
     const RotationMatrix<kD> rt = RotationOf(e.measurement.mean).transpose();
     for (int r = 0; r < kD; ++r) {
       for (int k = 0; k < kD; ++k, ++row) {
@@ -172,7 +158,7 @@ void Chordal(PoseGraph<PoseT>& graph) {
   b.clear();
   row = 0;
   for (const auto& e : graph.constraints) {
-    const double w = std::sqrt(KappaTau(e.measurement.information).second);
+    const double w = std::sqrt(ChordalWeightsOf(e.measurement.information).tau);
     const Eigen::Matrix<double, kD, 1> rhs =
         w * rotations.at(e.from) * TranslationOf(e.measurement.mean);
     for (int k = 0; k < kD; ++k, ++row) {

@@ -61,6 +61,24 @@ double GraphChi2(const PoseGraph<PoseT>& graph) {
   return chi2;
 }
 
+Eigen::Matrix2d RotationMatrixOf(const Pose2& p) { return p.rotation(); }
+Eigen::Matrix3d RotationMatrixOf(const Pose3& p) { return p.rotation().toRotationMatrix(); }
+
+template <typename PoseT>
+double GraphChordalCost(const PoseGraph<PoseT>& graph) {
+  double f = 0.0;
+  for (const auto& c : graph.constraints) {
+    const PoseT& xi = *graph.vertices.at(c.from).pose;
+    const PoseT& xj = *graph.vertices.at(c.to).pose;
+    const auto w = ChordalWeightsOf<PoseT::kTangentDim>(c.measurement.information);
+    const auto ri = RotationMatrixOf(xi);
+    f += w.kappa * (RotationMatrixOf(xj) - ri * RotationMatrixOf(c.measurement.mean)).squaredNorm();
+    f += w.tau * (xj.translation() - xi.translation() - ri * c.measurement.mean.translation())
+                     .squaredNorm();
+  }
+  return f;
+}
+
 RobustLoss LossFor(const PoseGraphOptimizerOptions& o) {
   switch (o.method) {
     case RobustMethod::kDcs: return {RobustLoss::Type::kDcs, o.dcs_phi};
@@ -144,7 +162,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
                                                       options.switch_function);
     } else {
       factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement,
-                                            robust(c) ? loss : RobustLoss{});
+                                            robust(c) ? loss : RobustLoss{}, options.cost);
     }
   }
 
@@ -174,6 +192,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   }
   out.summary = solved.summary;
   out.chi2 = GraphChi2(graph);
+  out.chordal_cost = GraphChordalCost(graph);
   out.graph = std::move(graph);
   return out;
 }
@@ -215,6 +234,11 @@ void Validate(const PoseGraphOptimizerOptions& o) {
   }
   if (!(o.dcs_phi > 0.0)) throw std::invalid_argument("dcs_phi must be > 0");
   if (!(o.loss_scale_sigma > 0.0)) throw std::invalid_argument("loss_scale_sigma must be > 0");
+  if (o.cost == RelativePoseCostType::kChordal && o.method == RobustMethod::kSwitchable) {
+    throw std::invalid_argument(
+        "the chordal cost is not available with switchable constraints; use --method none, "
+        "dcs, cauchy or huber");
+  }
   Validate(o.solver);
 }
 
@@ -222,6 +246,10 @@ PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
                                         const PoseGraphOptimizerOptions& options) {
   Validate(options);
   return std::visit([&](const auto& g) { return Run(g, options); }, graph);
+}
+
+double ChordalCost(const AnyPoseGraph& graph) {
+  return std::visit([](const auto& g) { return GraphChordalCost(g); }, graph);
 }
 
 double Chi2(const AnyPoseGraph& graph) {

@@ -42,6 +42,9 @@ std::optional<InitialGuess> InitialGuessFromString(std::string_view text);
 struct PoseGraphOptimizerOptions {
   RobustMethod method = RobustMethod::kSwitchable;
   InitialGuess initial_guess = InitialGuess::kFile;
+  // The objective of constraints without a switch; kChordal is SE-Sync's F
+  // (not available with switchable constraints).
+  RelativePoseCostType cost = RelativePoseCostType::kG2o;
   SwitchFunction switch_function = SwitchFunction::kLinear;
   // The default needs no per-dataset tuning. For one closure with
   // chi2 = e^T Omega e, the switchable objective s^2 chi2 + xi (1 - s)^2 is
@@ -84,6 +87,7 @@ struct PoseGraphOptimization {
   std::size_t accepted = 0;
   std::size_t rejected = 0;
   double chi2 = 0.0;  // g2o's chi2 of `graph` (see Chi2())
+  double chordal_cost = 0.0;  // SE-Sync's F of `graph` (see ChordalCost())
 };
 
 // Poses are first initialised as `options.initial_guess` says. Throws
@@ -95,6 +99,11 @@ PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
 // scaled by Psi(s)^2 for switched constraints, plus the switch priors'
 // information * (gamma - s)^2. Linear Psi.
 double Chi2(const AnyPoseGraph& graph);
+
+// SE-Sync's objective F at the graph's poses (robust-backend-notes.md §3):
+// sum over constraints of kappa |R_j - R_i R_ij|_F^2 + tau |t_j - t_i - R_i t_ij|^2,
+// switches ignored. Compare with SE-Sync's certified optima.
+double ChordalCost(const AnyPoseGraph& graph);
 
 // Removes every constraint whose switch is <= 0.5 or whose id is in
 // `rejected`, and every switch: the graph to hand to a planner.

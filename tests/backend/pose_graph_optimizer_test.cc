@@ -173,6 +173,48 @@ TEST_CASE("chordal initialisation escapes the local minima of MIT and M3500b",
   CHECK(OptimizePoseGraph(ReadGraphFile(root / "se-sync/MIT.g2o").graph, options).chi2 > 1000.0);
 }
 
+TEST_CASE("the chordal cost reaches SE-Sync's certified optima", "[backend][shared][chordal]") {
+  const std::filesystem::path root = testing::SharedPoseGraphs();
+  if (root.empty()) {
+    WARN("skipped: shared pose graphs not found");
+    return;
+  }
+  // robust-backend-notes.md §3; the references carry four significant
+  // digits, which bounds the tolerance (half a unit of the last digit).
+  const std::vector<std::pair<const char*, double>> optima = {
+      {"se-sync/manhattan.g2o", 6.432e3}, {"se-sync/intel.g2o", 5.235e1}, {"se-sync/CSAIL.g2o", 3.170e1}};
+  PoseGraphOptimizerOptions options;
+  options.method = RobustMethod::kNone;
+  options.initial_guess = InitialGuess::kChordal;
+  options.cost = RelativePoseCostType::kChordal;
+  for (const auto& [path, optimum] : optima) {
+    SECTION(path) {
+      const auto result = OptimizePoseGraph(ReadGraphFile(root / path).graph, options);
+      REQUIRE(result.summary.IsUsable());
+      CHECK(result.chordal_cost == Approx(optimum).epsilon(5e-4));
+      CHECK(result.chordal_cost == Approx(2.0 * result.summary.final_cost).epsilon(1e-9));
+    }
+  }
+  options.method = RobustMethod::kSwitchable;
+  CHECK_THROWS_AS(Validate(options), std::invalid_argument);
+}
+
+TEST_CASE("the chordal cost reaches SE-Sync's certified optima in 3D", "[backend][shared][chordal][slow]") {
+  const std::filesystem::path root = testing::SharedPoseGraphs();
+  if (root.empty()) {
+    WARN("skipped: shared pose graphs not found");
+    return;
+  }
+  PoseGraphOptimizerOptions options;
+  options.method = RobustMethod::kNone;
+  options.initial_guess = InitialGuess::kChordal;
+  options.cost = RelativePoseCostType::kChordal;
+  const auto garage = OptimizePoseGraph(ReadGraphFile(root / "se-sync/parking-garage.g2o").graph, options);
+  CHECK(garage.chordal_cost == Approx(1.263).epsilon(5e-4));
+  const auto cubicle = OptimizePoseGraph(ReadGraphFile(root / "se-sync/cubicle.g2o").graph, options);
+  CHECK(cubicle.chordal_cost == Approx(7.171e2).epsilon(5e-4));
+}
+
 struct ReferenceChi2 {
   const char* path;
   double chi2;
