@@ -26,7 +26,7 @@ Eigen::Matrix3d Information(double sigma_m, double sigma_rad) {
 }
 
 // The true relative pose perturbed by zero-mean Gaussian noise in its own
-// frame: measured = true * Exp-free (dx, dy, dtheta) increment.
+// frame: measured = true * (dx, dy, dtheta).
 Pose2 Perturb(const Pose2& exact, double sigma_m, double sigma_rad, std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   const double dx = sigma_m * n(rng), dy = sigma_m * n(rng), dt = sigma_rad * n(rng);
