@@ -62,12 +62,14 @@ case "$mode" in
   build) ;;
   demo)
     # The main job until the mapping pipeline lands: simulate a pose graph with
-    # ground truth and summarise it.
+    # ground truth, summarise it and optimise it.
     out="$root/out/demo"
     mkdir -p "$out"
     "$build_dir/apps/catgraph" generate-graph -o "$out/graph.g2o" --truth "$out/truth.g2o" \
       --poses 1000 --seed 1
     "$build_dir/apps/catgraph" info "$out/graph.g2o"
+    "$build_dir/apps/catgraph" optimize "$out/graph.g2o" -o "$out/corrected.g2o" \
+      --report "$out/report.json"
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
