@@ -48,4 +48,14 @@ inline std::filesystem::path SharedPoseGraphs() {
 
 }  // namespace catgraph::testing
 
+// Declares `root`, the shared pose-graph folder, or ends the test case with
+// a warning when ../shared is absent (Catch2 2 has no SKIP).
+#define CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root)                                       \
+  const std::filesystem::path root = ::catgraph::testing::SharedPoseGraphs();          \
+  if (root.empty()) {                                                                   \
+    WARN("skipped: shared pose graphs not found at " CATGRAPH_SHARED_DATASETS           \
+         "/pose-graphs (set -DCATGRAPH_SHARED_DATASETS=...)");                          \
+    return;                                                                             \
+  }
+
 #endif  // CATGRAPH_TESTS_TEST_SUPPORT_H_

@@ -154,11 +154,7 @@ TEST_CASE("chordal initialisation recovers exact poses from exact measurements",
 
 TEST_CASE("chordal initialisation escapes the local minima of MIT and M3500b",
           "[backend][init][shared]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found");
-    return;
-  }
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   PoseGraphOptimizerOptions options;
   options.method = RobustMethod::kNone;
   options.initial_guess = InitialGuess::kChordal;
@@ -173,20 +169,22 @@ TEST_CASE("chordal initialisation escapes the local minima of MIT and M3500b",
   CHECK(OptimizePoseGraph(ReadGraphFile(root / "se-sync/MIT.g2o").graph, options).chi2 > 1000.0);
 }
 
-TEST_CASE("the chordal cost reaches SE-Sync's certified optima", "[backend][shared][chordal]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found");
-    return;
-  }
-  // robust-backend-notes.md §3; the references carry four significant
-  // digits, which bounds the tolerance (half a unit of the last digit).
-  const std::vector<std::pair<const char*, double>> optima = {
-      {"se-sync/manhattan.g2o", 6.432e3}, {"se-sync/intel.g2o", 5.235e1}, {"se-sync/CSAIL.g2o", 3.170e1}};
+// Plain least squares on SE-Sync's cost from the chordal initial guess.
+PoseGraphOptimizerOptions ChordalCostOptions() {
   PoseGraphOptimizerOptions options;
   options.method = RobustMethod::kNone;
   options.initial_guess = InitialGuess::kChordal;
   options.cost = RelativePoseCostType::kChordal;
+  return options;
+}
+
+TEST_CASE("the chordal cost reaches SE-Sync's certified optima", "[backend][shared][chordal]") {
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
+  // robust-backend-notes.md §3; the references carry four significant
+  // digits, which bounds the tolerance (half a unit of the last digit).
+  const std::vector<std::pair<const char*, double>> optima = {
+      {"se-sync/manhattan.g2o", 6.432e3}, {"se-sync/intel.g2o", 5.235e1}, {"se-sync/CSAIL.g2o", 3.170e1}};
+  PoseGraphOptimizerOptions options = ChordalCostOptions();
   for (const auto& [path, optimum] : optima) {
     SECTION(path) {
       const auto result = OptimizePoseGraph(ReadGraphFile(root / path).graph, options);
@@ -200,15 +198,8 @@ TEST_CASE("the chordal cost reaches SE-Sync's certified optima", "[backend][shar
 }
 
 TEST_CASE("the chordal cost reaches SE-Sync's certified optima in 3D", "[backend][shared][chordal][slow]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found");
-    return;
-  }
-  PoseGraphOptimizerOptions options;
-  options.method = RobustMethod::kNone;
-  options.initial_guess = InitialGuess::kChordal;
-  options.cost = RelativePoseCostType::kChordal;
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
+  PoseGraphOptimizerOptions options = ChordalCostOptions();
   const auto garage = OptimizePoseGraph(ReadGraphFile(root / "se-sync/parking-garage.g2o").graph, options);
   CHECK(garage.chordal_cost == Approx(1.263).epsilon(5e-4));
   const auto cubicle = OptimizePoseGraph(ReadGraphFile(root / "se-sync/cubicle.g2o").graph, options);
@@ -222,11 +213,7 @@ struct ReferenceChi2 {
 
 TEST_CASE("plain least squares reaches the reference chi2 of the shared graphs",
           "[backend][shared]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found");
-    return;
-  }
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   // ../shared/docs/robust-backend-notes.md, section 3.
   const std::vector<ReferenceChi2> references = {
       {"vertigo/manhattan/originalDataset/g2o/manhattanOlson3500.g2o", 146.08},

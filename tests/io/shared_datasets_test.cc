@@ -60,12 +60,7 @@ const std::vector<Expected> kFiles = {
 
 TEST_CASE("every shared pose graph reads with the README's counts and round-trips",
           "[io][shared]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found at " CATGRAPH_SHARED_DATASETS
-         "/pose-graphs (set -DCATGRAPH_SHARED_DATASETS=...)");
-    return;
-  }
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   for (const Expected& e : kFiles) {
     SECTION(e.path) {
       const GraphFile file = ReadGraphFile(root / e.path);
@@ -91,11 +86,7 @@ TEST_CASE("every shared pose graph reads with the README's counts and round-trip
 
 TEST_CASE("the iSAM ground truth squares 50 and 100 into information 2500 and 10000",
           "[io][shared]") {
-  const std::filesystem::path root = testing::SharedPoseGraphs();
-  if (root.empty()) {
-    WARN("skipped: shared pose graphs not found");
-    return;
-  }
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   const GraphFile file = ReadGraphFile(root / "isam-groundtruth/manhattanOlson3500_groundtruth.txt");
   const auto& c = std::get<PoseGraph2>(file.graph).constraints.front();
   CHECK(c.measurement.information(0, 0) == Approx(2500.0));
