@@ -24,13 +24,18 @@ void Values::Insert(SwitchId id, double value) {
   entries_.insert_or_assign(SwitchKey(id), Entry{VariableKind::kSwitch, {value}});
 }
 
-const Values::Entry& Values::At(Key key, VariableKind kind) const {
+const Values::Entry& Values::Find(Key key) const {
   auto it = entries_.find(key);
   if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
-  if (it->second.kind != kind) {
+  return it->second;
+}
+
+const Values::Entry& Values::At(Key key, VariableKind kind) const {
+  const Entry& entry = Find(key);
+  if (entry.kind != kind) {
     throw std::invalid_argument("Values: " + ToString(key) + " holds another kind of variable");
   }
-  return it->second;
+  return entry;
 }
 
 Pose2 Values::AtPose2(PoseId id) const {
@@ -47,21 +52,12 @@ double Values::AtSwitch(SwitchId id) const {
   return At(SwitchKey(id), VariableKind::kSwitch).data[0];
 }
 
-VariableKind Values::KindOf(Key key) const {
-  auto it = entries_.find(key);
-  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
-  return it->second.kind;
-}
+VariableKind Values::KindOf(Key key) const { return Find(key).kind; }
 
-double* Values::MutableBlock(Key key) {
-  auto it = entries_.find(key);
-  if (it == entries_.end()) throw std::out_of_range("Values: no variable for " + ToString(key));
-  return it->second.data.data();
-}
+const double* Values::Block(Key key) const { return Find(key).data.data(); }
 
-const double* Values::Block(Key key) const {
-  return const_cast<Values*>(this)->MutableBlock(key);
-}
+// The entry is ours and non-const here; only the lookup is shared.
+double* Values::MutableBlock(Key key) { return const_cast<double*>(Block(key)); }
 
 int Values::BlockSize(VariableKind kind) {
   switch (kind) {

@@ -78,6 +78,7 @@ class Values {
     VariableKind kind = VariableKind::kPose2;
     std::array<double, 7> data{};
   };
+  const Entry& Find(Key key) const;  // throws std::out_of_range
   const Entry& At(Key key, VariableKind kind) const;
 
   std::map<Key, Entry> entries_;  // node-based: block pointers stay valid
