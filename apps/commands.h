@@ -15,6 +15,10 @@ namespace catgraph {
 void AddInfoCommand(CLI::App& app, std::ostream& out);
 void AddGenerateGraphCommand(CLI::App& app, std::ostream& out);
 void AddOptimizeCommand(CLI::App& app, std::ostream& out);
+void AddInjectCommand(CLI::App& app, std::ostream& out);
+void AddEvaluateCommand(CLI::App& app, std::ostream& out);
+void AddExportCommand(CLI::App& app, std::ostream& out);
+void AddSweepCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

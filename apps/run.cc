@@ -18,6 +18,10 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddInfoCommand(app, out);
   AddGenerateGraphCommand(app, out);
   AddOptimizeCommand(app, out);
+  AddInjectCommand(app, out);
+  AddEvaluateCommand(app, out);
+  AddSweepCommand(app, out);
+  AddExportCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

@@ -125,21 +125,12 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
   };
 
-  // New switches continue after every id in use (g2o's shared id space).
-  std::int64_t next_switch = 0;
-  for (const auto& [id, v] : graph.vertices) next_switch = std::max(next_switch, id.value() + 1);
-  for (const auto& [id, s] : graph.switches) next_switch = std::max(next_switch, id.value() + 1);
-  const double switch_information =
-      options.switch_prior_information > 0.0
-          ? options.switch_prior_information
-          : ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
   if (switchable) {
-    for (auto& c : graph.constraints) {
-      if (c.switch_id || !robust(c)) continue;
-      const SwitchId id(next_switch++);
-      c.switch_id = id;
-      graph.switches.emplace(id, SwitchVariable{id, 1.0, SwitchPrior{1.0, switch_information}});
-    }
+    const double switch_information =
+        options.switch_prior_information > 0.0
+            ? options.switch_prior_information
+            : ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
+    graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
   }
 
   Values initial;

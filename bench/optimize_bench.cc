@@ -20,7 +20,9 @@ void BM_OptimizeManhattan(benchmark::State& state, RobustMethod method) {
     return;
   }
   PoseGraph2 graph = std::get<PoseGraph2>(ReadGraphFile(path).graph);
-  const auto injected = InjectRandomOutliers(graph, static_cast<int>(state.range(0)), 1);
+  OutlierOptions outliers;
+  outliers.count = static_cast<int>(state.range(0));
+  InjectOutliers(graph, outliers);
   PoseGraphOptimizerOptions options;
   options.method = method;
   PoseGraphOptimization result;

@@ -2,7 +2,11 @@
 #ifndef CATGRAPH_TESTS_TEST_SUPPORT_H_
 #define CATGRAPH_TESTS_TEST_SUPPORT_H_
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <numbers>
 #include <random>
 #include <string>
@@ -38,6 +42,24 @@ inline bool ApproxEqual(const Pose3& a, const Pose3& b, double tol = 1e-9) {
 
 inline std::filesystem::path Fixture(const std::string& name) {
   return std::filesystem::path(CATGRAPH_TEST_FIXTURES) / name;
+}
+
+// A fresh, empty directory for one test case: unique per process, so
+// parallel ctest runs do not share files.
+inline std::filesystem::path TempDir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("catgraph_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// The whole content of a file ("" if it cannot be read).
+inline std::string ReadText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 // The shared pose-graph folder, or an empty path when it is absent.

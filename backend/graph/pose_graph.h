@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <type_traits>
@@ -84,6 +85,21 @@ struct PoseGraph {
     ClosureId::ValueType next = 0;
     for (const auto& c : constraints) next = std::max(next, c.id.value() + 1);
     return ClosureId(next);
+  }
+  // Gives every constraint that has no switch and satisfies `selected` a new
+  // switch (initial value 1) with `prior`. Switch ids continue after every
+  // vertex and switch id in use, as g2o's shared id space requires.
+  template <typename Predicate>
+  void AddSwitches(Predicate selected, const SwitchPrior& prior) {
+    std::int64_t next = 0;
+    for (const auto& [id, v] : vertices) next = std::max(next, id.value() + 1);
+    for (const auto& [id, s] : switches) next = std::max(next, id.value() + 1);
+    for (auto& c : constraints) {
+      if (c.switch_id || !selected(c)) continue;
+      const SwitchId id(next++);
+      c.switch_id = id;
+      switches.emplace(id, SwitchVariable{id, 1.0, prior});
+    }
   }
 };
 

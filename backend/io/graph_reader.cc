@@ -20,6 +20,7 @@
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/internal/closure_metadata.h"
+#include "backend/io/internal/text_line.h"
 
 namespace catgraph {
 namespace {
@@ -30,73 +31,6 @@ constexpr NameTable<GraphFormat, 4> kGraphFormatNames = {{
     {GraphFormat::kToro, "toro"},
     {GraphFormat::kIsam, "isam"},
 }};
-
-constexpr std::string_view kWhitespace = " \t\r\v\f";
-
-std::vector<std::string_view> Tokenize(std::string_view line) {
-  std::vector<std::string_view> tokens;
-  std::size_t pos = 0;
-  while (true) {
-    pos = line.find_first_not_of(kWhitespace, pos);
-    if (pos == std::string_view::npos) break;
-    const std::size_t end = std::min(line.find_first_of(kWhitespace, pos), line.size());
-    tokens.push_back(line.substr(pos, end - pos));
-    pos = end;
-  }
-  return tokens;
-}
-
-// One tokenised line with checked accessors that throw FileError.
-class Line {
- public:
-  Line(const std::string& file, int number, std::vector<std::string_view> tokens)
-      : file_(file), number_(number), tokens_(std::move(tokens)) {}
-
-  int number() const { return number_; }
-  std::size_t size() const { return tokens_.size(); }
-  std::string_view tag() const { return tokens_.front(); }
-
-  [[noreturn]] void Fail(const std::string& message) const {
-    throw FileError(file_, number_, message);
-  }
-  void ExpectValues(std::size_t count, std::string_view layout) const {
-    const std::size_t found = tokens_.size() - 1;
-    if (found != count) {
-      Fail(std::string(tag()) + ": expected " + std::to_string(count) + " values (" +
-           std::string(layout) + "), found " + std::to_string(found) +
-           (found < count ? " (truncated line?)" : ""));
-    }
-  }
-  double Number(std::size_t index, std::string_view what) const {
-    const std::string_view token = tokens_.at(index);
-    double value = 0.0;
-    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-    if (ec != std::errc() || end != token.data() + token.size()) {
-      Fail(std::string(tag()) + ": expected a number for " + std::string(what) + ", found '" +
-           std::string(token) + "'");
-    }
-    if (!std::isfinite(value)) {
-      Fail(std::string(tag()) + ": " + std::string(what) + " is '" + std::string(token) +
-           "'; expected a finite number");
-    }
-    return value;
-  }
-  std::int64_t Id(std::size_t index, std::string_view what, std::int64_t max_id) const {
-    const std::string_view token = tokens_.at(index);
-    std::int64_t value = 0;
-    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-    if (ec != std::errc() || end != token.data() + token.size() || value < 0 || value > max_id) {
-      Fail(std::string(tag()) + ": expected a non-negative integer id for " + std::string(what) +
-           " (at most " + std::to_string(max_id) + "), found '" + std::string(token) + "'");
-    }
-    return value;
-  }
-
- private:
-  const std::string& file_;
-  int number_;
-  std::vector<std::string_view> tokens_;
-};
 
 enum class Family { kNone, kG2o, kToroOrIsam };
 
@@ -509,22 +443,8 @@ GraphFile ReadGraph(std::istream& in, const std::string& name, const ReadGraphOp
   int number = 0;
   int dimension = 0;
   int dimension_line = 0;
-  while (true) {
-    text.clear();
-    // Read by chunks so a hostile line cannot grow without bound.
-    char c;
-    bool any = false;
-    while (in.get(c)) {
-      any = true;
-      if (c == '\n') break;
-      if (text.size() >= options.max_line_bytes) {
-        throw FileError(name, number + 1,
-                        "line longer than " + std::to_string(options.max_line_bytes) +
-                            " bytes; expected one vertex or edge per line");
-      }
-      text.push_back(c);
-    }
-    if (!any) break;
+  while (ReadBoundedLine(in, text, options.max_line_bytes, name, number,
+                         "one vertex or edge per line")) {
     ++number;
     const auto tokens = Tokenize(text);
     if (tokens.empty()) continue;
@@ -563,19 +483,8 @@ GraphFile ReadGraph(std::istream& in, const std::string& name, const ReadGraphOp
 }
 
 GraphFile ReadGraphFile(const std::filesystem::path& path, const ReadGraphOptions& options) {
-  const std::string name = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw FileError(name, 0, "is a directory; expected a pose-graph file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw FileError(name, 0,
-                    std::filesystem::exists(path, ec)
-                        ? "cannot open the file for reading (permission denied?)"
-                        : "no such file; expected a pose-graph file (g2o, TORO or iSAM)");
-  }
-  return ReadGraph(in, name, options);
+  std::ifstream in = OpenForReading(path, "a pose-graph file (g2o, TORO or iSAM)");
+  return ReadGraph(in, path.string(), options);
 }
 
 }  // namespace catgraph

@@ -9,47 +9,14 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/internal/closure_metadata.h"
+#include "backend/io/internal/text_line.h"
 
 namespace catgraph {
 namespace {
 
-class G2oLine {
- public:
-  explicit G2oLine(std::string_view tag) : text_(tag) {}
-  G2oLine& operator<<(double value) {
-    char buffer[32];
-    const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-    text_ += ' ';
-    text_.append(buffer, result.ptr);
-    return *this;
-  }
-  G2oLine& operator<<(std::int64_t id) {
-    text_ += ' ';
-    text_ += std::to_string(id);
-    return *this;
-  }
-  template <typename Tag>
-  G2oLine& operator<<(StrongId<Tag> id) { return *this << id.value(); }
-  template <int N>
-  G2oLine& operator<<(const Eigen::Matrix<double, N, N>& information) {
-    for (int r = 0; r < N; ++r) {
-      for (int c = r; c < N; ++c) *this << information(r, c);
-    }
-    return *this;
-  }
-  G2oLine& operator<<(const Pose2& pose) { return *this << pose.x() << pose.y() << pose.theta(); }
-  G2oLine& operator<<(const Pose3& pose) {
-    const auto& t = pose.translation();
-    const auto& q = pose.rotation();
-    return *this << t.x() << t.y() << t.z() << q.x() << q.y() << q.z() << q.w();
-  }
-  const std::string& str() const { return text_; }
 
- private:
-  std::string text_;
-};
 
-std::ostream& operator<<(std::ostream& out, const G2oLine& line) {
+std::ostream& operator<<(std::ostream& out, const LineWriter& line) {
   return out << line.str() << '\n';
 }
 
@@ -58,16 +25,16 @@ void WriteGraph(const PoseGraph<PoseT>& graph, std::ostream& out) {
   constexpr bool k2d = PoseGraph<PoseT>::kDimension == 2;
   if (graph.HasAllInitialPoses()) {
     for (const auto& [id, vertex] : graph.vertices) {
-      out << (G2oLine(k2d ? "VERTEX_SE2" : "VERTEX_SE3:QUAT") << id << *vertex.pose);
+      out << (LineWriter(k2d ? "VERTEX_SE2" : "VERTEX_SE3:QUAT") << id << *vertex.pose);
     }
     for (const auto& [id, vertex] : graph.vertices) {
-      if (vertex.fixed) out << (G2oLine("FIX") << id);
+      if (vertex.fixed) out << (LineWriter("FIX") << id);
     }
   }
   for (const auto& [id, variable] : graph.switches) {
-    out << (G2oLine("VERTEX_SWITCH") << id << variable.value);
+    out << (LineWriter("VERTEX_SWITCH") << id << variable.value);
     if (variable.prior) {
-      out << (G2oLine("EDGE_SWITCH_PRIOR") << id << variable.prior->mean
+      out << (LineWriter("EDGE_SWITCH_PRIOR") << id << variable.prior->mean
                                            << variable.prior->information);
     }
   }
@@ -84,7 +51,7 @@ void WriteGraph(const PoseGraph<PoseT>& graph, std::ostream& out) {
       out << FormatClosureMetadata({c.id, c.kind, c.provenance}) << '\n';
     }
     ++index;
-    G2oLine line(c.switch_id        ? (k2d ? "EDGE_SE2_SWITCHABLE" : "EDGE_SE3_SWITCHABLE")
+    LineWriter line(c.switch_id        ? (k2d ? "EDGE_SE2_SWITCHABLE" : "EDGE_SE3_SWITCHABLE")
                  : c.maxmix_weight ? "EDGE_SE2_MAXMIX"
                                    : (k2d ? "EDGE_SE2" : "EDGE_SE3:QUAT"));
     line << c.from << c.to;

@@ -5,10 +5,11 @@
 #include <string>
 #include <vector>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "apps/sweep.h"
 #include "tests/test_support.h"
 
 namespace catgraph {
@@ -20,9 +21,8 @@ struct Result {
   std::string err;
 };
 
-Result Run(std::vector<std::string> args) {
-  args.insert(args.begin(), "catgraph");
-  std::vector<const char*> argv;
+Result Run(const std::vector<std::string>& args) {
+  std::vector<const char*> argv = {"catgraph"};
   for (const auto& a : args) argv.push_back(a.c_str());
   std::ostringstream out, err;
   const int status = RunCatgraph(static_cast<int>(argv.size()), argv.data(), out, err);
@@ -129,6 +129,129 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   // --drop-rejected writes a graph without switches.
   REQUIRE(Run({"optimize", graph, "-o", out, "--drop-rejected"}).status == 0);
   CHECK(nlohmann::json::parse(Run({"info", out, "--json"}).out).at("switches") == 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("inject, optimize, evaluate: the experiment in three commands", "[apps][inject][evaluate]") {
+  const auto dir = testing::TempDir("cli_experiment");
+  const std::string graph = (dir / "graph.g2o").string(), truth = (dir / "truth.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--truth", truth, "--poses", "300", "--seed", "2"})
+              .status == 0);
+  const std::string spoiled = (dir / "spoiled.g2o").string(), labels = (dir / "labels.csv").string();
+  const Result inject = Run({"inject", graph, "-o", spoiled, "--outliers", "30", "--policy",
+                             "local-grouped", "--group-size", "3", "--seed", "4", "--labels", labels});
+  REQUIRE(inject.status == 0);
+  CHECK(inject.out.find("injected 30 false loop closures (local-grouped, 10 groups, seed 4)") !=
+        std::string::npos);
+  // Same seed, same bytes.
+  const std::string again = (dir / "again.g2o").string();
+  REQUIRE(Run({"inject", graph, "-o", again, "--outliers", "30", "--policy", "local-grouped",
+               "--group-size", "3", "--seed", "4"}).status == 0);
+  CHECK(testing::ReadText(spoiled) == testing::ReadText(again));
+
+  const std::string corrected = (dir / "corrected.g2o").string();
+  REQUIRE(Run({"optimize", spoiled, "-o", corrected}).status == 0);
+  const Result evaluate = Run({"evaluate", corrected, "--truth", truth, "--labels", labels, "--json"});
+  REQUIRE(evaluate.status == 0);
+  const auto j = nlohmann::json::parse(evaluate.out);
+  CHECK(j.at("poses") == 300);
+  CHECK(j.at("precision") == 1.0);
+  CHECK(j.at("recall").get<double>() > 0.99);
+  CHECK(j.at("false_positives") == 0);
+  CHECK(j.at("true_negatives") == 30);
+  // The simulated noise is small: the corrected map is within centimetres.
+  CHECK(j.at("ate_rmse").get<double>() < 0.2);
+  CHECK(j.at("rmse_anchored").get<double>() >= j.at("ate_rmse").get<double>());
+
+  // Plain least squares keeps the false closures: precision drops, ATE grows.
+  const std::string plain = (dir / "plain.g2o").string(), report = (dir / "plain.json").string();
+  REQUIRE(Run({"optimize", spoiled, "-o", plain, "--method", "none", "--report", report}).status == 0);
+  const auto k = nlohmann::json::parse(
+      Run({"evaluate", plain, "--truth", truth, "--labels", labels, "--report", report, "--json"}).out);
+  CHECK(k.at("false_positives") == 30);
+  CHECK(k.at("ate_rmse").get<double>() > j.at("ate_rmse").get<double>());
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("inject writes switchable files and hierarchical parents", "[apps][inject]") {
+  const auto dir = testing::TempDir("cli_inject");
+  const std::string graph = (dir / "graph.g2o").string(), out = (dir / "out.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "100"}).status == 0);
+  REQUIRE(Run({"inject", graph, "-o", out, "--outliers", "6", "--policy", "hierarchical",
+               "--group-size", "3", "--switchable", "--information", "2"}).status == 0);
+  const std::string text = testing::ReadText(out);
+  CHECK(text.find("VERTEX_SWITCH") != std::string::npos);
+  CHECK(text.find("EDGE_SE2_SWITCHABLE") != std::string::npos);
+  CHECK(text.find(" visual\n") != std::string::npos);
+  CHECK(text.find(" inferred ") != std::string::npos);  // "#CATGRAPH_CLOSURE id inferred parent"
+  const Result bad = Run({"inject", graph, "-o", out, "--outliers", "6", "--information", "1", "2"});
+  CHECK(bad.status == 1);
+  CHECK(bad.err.find("--information: expected 1 value") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("export writes TUM, JSON, DOT, SVG and PNG; edges-only graphs are refused by name",
+          "[apps][export]") {
+  const auto dir = testing::TempDir("cli_export");
+  const std::string graph = (dir / "graph.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "50"}).status == 0);
+  for (const char* ext : {"tum", "json", "dot", "svg", "png"}) {
+    const std::string out = (dir / (std::string("out.") + ext)).string();
+    const Result r = Run({"export", graph, "-o", out});
+    CAPTURE(ext, r.err);
+    CHECK(r.status == 0);
+    CHECK(std::filesystem::file_size(out) > 100);
+  }
+  CHECK(Run({"export", graph, "--format", "tum", "-o", (dir / "traj.txt").string()}).status == 0);
+  const Result unknown = Run({"export", graph, "-o", (dir / "out.xyz").string()});
+  CHECK(unknown.status == 1);
+  CHECK(unknown.err.find("give --format") != std::string::npos);
+  const Result edges_only =
+      Run({"export", testing::Fixture("edges_only.g2o").string(), "-o", (dir / "e.tum").string()});
+  CHECK(edges_only.status == 1);
+  CHECK(edges_only.err.find("edges_only.g2o: pose") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "e.tum"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("evaluate names the file at fault", "[apps][evaluate][bad-input]") {
+  const auto dir = testing::TempDir("cli_evaluate");
+  const std::string graph = (dir / "graph.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "50"}).status == 0);
+  std::ofstream(dir / "short.txt") << "0 0 0\n1 0 0\n";
+  const Result r = Run({"evaluate", graph, "--truth", (dir / "short.txt").string()});
+  CHECK(r.status == 1);
+  CHECK(r.err.find("pose 2 of the estimate has no ground truth") != std::string::npos);
+  const Result missing = Run({"evaluate", graph, "--truth", (dir / "nope.txt").string()});
+  CHECK(missing.status == 1);
+  CHECK(missing.err.find("nope.txt: no such file") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {
+  const auto dir = testing::TempDir("cli_sweep");
+  REQUIRE(Run({"generate-graph", "-o", (dir / "g.g2o").string(), "--truth",
+               (dir / "t.g2o").string(), "--poses", "80"}).status == 0);
+  std::ofstream(dir / "sweep.yaml")
+      << "datasets:\n  - {name: sim, graph: g.g2o, truth: t.g2o}\nmethods: [none, dcs]\n"
+         "policies: [random]\noutliers: [0, 4]\nseeds: 2\n";
+  const std::string config = (dir / "sweep.yaml").string();
+  const Result first = Run({"sweep", "--config", config, "-o", (dir / "all.csv").string(),
+                            "--quiet", "--plot", (dir / "fig").string()});
+  REQUIRE(first.status == 0);
+  CHECK(first.out.find("8 runs, 0 already in") != std::string::npos);
+  CHECK(std::filesystem::exists(dir / "fig-sim.svg"));
+  const Result second = Run({"sweep", "--config", config, "-o", (dir / "all.csv").string(), "--quiet"});
+  CHECK(second.out.find("8 already in") != std::string::npos);
+  for (const char* shard : {"0/2", "1/2"}) {
+    REQUIRE(Run({"sweep", "--config", config, "--shard", shard, "--quiet", "-o",
+                 (dir / (std::string("s") + shard[0] + ".csv")).string()}).status == 0);
+  }
+  REQUIRE(Run({"sweep", "merge", (dir / "s0.csv").string(), (dir / "s1.csv").string(), "-o",
+               (dir / "merged.csv").string()}).status == 0);
+  CHECK(ReadSweepCsv(dir / "merged.csv").size() == 8);
+  const Result no_config = Run({"sweep"});
+  CHECK(no_config.status == 2);
   std::filesystem::remove_all(dir);
 }
 

@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
 

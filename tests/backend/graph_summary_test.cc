@@ -1,6 +1,6 @@
 #include <sstream>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/graph_summary.h"
 #include "backend/io/graph_io.h"

@@ -2,7 +2,7 @@
 #include <numbers>
 #include <random>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/graph/pose2.h"
 #include "tests/test_support.h"

@@ -1,7 +1,7 @@
 #include <numbers>
 #include <random>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/graph/pose3.h"
 #include "tests/test_support.h"

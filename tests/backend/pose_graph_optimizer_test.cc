@@ -3,7 +3,7 @@
 #include <random>
 #include <set>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/chi_square.h"
 #include "backend/factor_graph.h"
@@ -92,8 +92,11 @@ TEST_CASE("switchable constraints with the default gate reject injected closures
   options.num_poses = 500;
   options.seed = 9;
   SimulatedPoseGraph2 sim = SimulateManhattanWorld(options);
-  const std::vector<ClosureId> ids = InjectRandomOutliers(sim.graph, 50, 3);
-  const std::set<ClosureId> injected(ids.begin(), ids.end());
+  OutlierOptions outliers;
+  outliers.count = 50;
+  outliers.seed = 3;
+  std::set<ClosureId> injected;
+  for (const InjectedClosure& c : InjectOutliers(sim.graph, outliers)) injected.insert(c.id);
   const PoseGraphOptimization result = OptimizePoseGraph(sim.graph);
   REQUIRE(result.summary.IsUsable());
   std::size_t false_accepted = 0, true_rejected = 0;

@@ -4,7 +4,7 @@
 
 #include <variant>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/graph/pose_graph.h"
 #include "tests/test_support.h"

@@ -3,7 +3,7 @@
 #include <sstream>
 #include <variant>
 
-#include <catch2/catch.hpp>
+#include "tests/catch.h"
 
 #include "backend/io/graph_io.h"
 #include "tests/io/graph_equality.h"

@@ -1,0 +1,138 @@
+// catgraph evaluate EST --truth GT [--labels L] [--report R] [--json]
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <numbers>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "backend/evaluation.h"
+#include "backend/io/closure_labels.h"
+#include "backend/io/file_error.h"
+#include "backend/io/graph_io.h"
+#include "backend/io/trajectory_io.h"
+
+namespace catgraph {
+namespace {
+
+struct EvaluateOptions {
+  std::string estimate, truth, labels, report;
+  std::string format = "auto";
+  std::string truth_format = "auto";
+  bool json = false;
+};
+
+// The closure decisions of `catgraph optimize --report`.
+std::vector<ClosureOutcome> OutcomesFromReport(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw FileError(path, 0, "cannot open; expected the JSON report of catgraph optimize");
+  nlohmann::json j;
+  try {
+    in >> j;
+    std::vector<ClosureOutcome> outcomes;
+    for (const auto& c : j.at("closures")) {
+      outcomes.push_back({PoseId(c.at("from").get<std::int64_t>()),
+                          PoseId(c.at("to").get<std::int64_t>()), c.at("accepted").get<bool>()});
+    }
+    return outcomes;
+  } catch (const nlohmann::json::exception& e) {
+    throw FileError(path, 0,
+                    std::string("expected the JSON report of catgraph optimize with a 'closures' "
+                                "array of {from, to, accepted}: ") + e.what());
+  }
+}
+
+nlohmann::json StatisticsJson(const ErrorStatistics& s, double scale = 1.0) {
+  return {{"rmse", s.rmse * scale}, {"mean", s.mean * scale}, {"median", s.median * scale},
+          {"max", s.max * scale}};
+}
+
+void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
+  ReadGraphOptions read_options;
+  read_options.format = *GraphFormatFromString(o.format);
+  const AnyPoseGraph estimate = ReadGraphFile(o.estimate, read_options).graph;
+  const AnyTrajectory truth =
+      ReadTrajectoryFile(o.truth, *TrajectoryFormatFromString(o.truth_format));
+  AnyTrajectory estimated;
+  try {
+    estimated = TrajectoryOf(estimate);
+  } catch (const std::invalid_argument& e) {
+    throw FileError(o.estimate, 0, e.what());
+  }
+  const TrajectoryEvaluation t = EvaluateTrajectory(estimated, truth);
+  std::optional<ClosureScores> scores;
+  if (!o.labels.empty()) {
+    const std::vector<ClosureOutcome> outcomes =
+        o.report.empty() ? ClosureOutcomesOf(estimate) : OutcomesFromReport(o.report);
+    scores = ScoreClosures(outcomes, ReadClosureLabelsFile(o.labels));
+  }
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  if (o.json) {
+    nlohmann::json j = {{"estimate", o.estimate},
+                        {"truth", o.truth},
+                        {"poses", t.poses},
+                        {"ate_rmse", t.ate_m.rmse},
+                        {"ate_mean", t.ate_m.mean},
+                        {"ate_median", t.ate_m.median},
+                        {"ate_max", t.ate_m.max},
+                        {"rmse_anchored", t.rmse_anchored_m},
+                        {"rpe_translation", StatisticsJson(t.rpe_translation_m)},
+                        {"rpe_rotation_deg", StatisticsJson(t.rpe_rotation_rad, kDeg)},
+                        {"precision", nullptr},
+                        {"recall", nullptr},
+                        {"f1", nullptr}};
+    if (scores) {
+      j["precision"] = scores->precision;
+      j["recall"] = scores->recall;
+      j["f1"] = scores->f1;
+      j["true_positives"] = scores->true_positives;
+      j["false_positives"] = scores->false_positives;
+      j["true_negatives"] = scores->true_negatives;
+      j["false_negatives"] = scores->false_negatives;
+    }
+    out << j.dump(2) << '\n';
+    return;
+  }
+  out << o.estimate << " against " << o.truth << " (" << t.poses << " poses)\n"
+      << "ATE after alignment (m): rmse " << t.ate_m.rmse << ", mean " << t.ate_m.mean
+      << ", median " << t.ate_m.median << ", max " << t.ate_m.max << '\n'
+      << "RMSE with pose 0 anchored (m): " << t.rmse_anchored_m << '\n'
+      << "RPE per step: translation rmse " << t.rpe_translation_m.rmse << " m, rotation rmse "
+      << t.rpe_rotation_rad.rmse * kDeg << " deg\n";
+  if (scores) {
+    out << "loop closures: precision " << scores->precision << ", recall " << scores->recall
+        << ", F1 " << scores->f1 << " (true accepted " << scores->true_positives
+        << ", false accepted " << scores->false_positives << ", false rejected "
+        << scores->true_negatives << ", true rejected " << scores->false_negatives << ")\n";
+  }
+}
+
+}  // namespace
+
+void AddEvaluateCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<EvaluateOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "evaluate",
+      "Score an optimised graph against ground truth: ATE after rigid alignment, RMSE with "
+      "pose 0 anchored, RPE; with --labels, precision and recall of the accepted closures.");
+  cmd->add_option("estimate", o->estimate, "Optimised pose graph (g2o, TORO, iSAM)")->required();
+  AddGraphFormatOption(*cmd, o->format);
+  cmd->add_option("--truth", o->truth,
+                  "Ground truth: a pose graph, a pose list ('x y theta' or 'id x y theta' per "
+                  "line) or a TUM trajectory")
+      ->required();
+  cmd->add_option("--truth-format", o->truth_format, "Ground-truth format")
+      ->check(CLI::IsMember({"auto", "graph", "poses", "tum"}))
+      ->capture_default_str();
+  cmd->add_option("--labels", o->labels, "Closure labels written by catgraph inject");
+  cmd->add_option("--report", o->report,
+                  "With --labels: take each closure's decision from this catgraph optimize "
+                  "--report instead of the estimate's switches (for dcs, cauchy, huber)");
+  cmd->add_flag("--json", o->json,
+                "Print one JSON object (ate_rmse, rmse_anchored, precision, recall, ...)");
+  cmd->callback([o, &out] { RunEvaluate(*o, out); });
+}
+
+}  // namespace catgraph

@@ -1,0 +1,114 @@
+// catgraph inject IN -o OUT --outliers N [--policy P] [--group-size G] ...
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "apps/commands.h"
+#include "backend/io/closure_labels.h"
+#include "backend/io/graph_io.h"
+#include "simulation/outlier_injection.h"
+
+namespace catgraph {
+namespace {
+
+struct InjectOptions {
+  std::string input, output, labels;
+  std::string format = "auto";
+  std::string policy = "random";
+  std::vector<double> information;
+  bool switchable = false;
+  double switch_prior_information = 1.0;
+  OutlierOptions outliers;
+};
+
+// One value: that value times the identity; otherwise g2o's upper triangle.
+Eigen::MatrixXd InformationFromValues(const std::vector<double>& values, int dim) {
+  const auto n = static_cast<std::size_t>(dim * (dim + 1) / 2);
+  if (values.size() == 1) return values.front() * Eigen::MatrixXd::Identity(dim, dim);
+  if (values.size() != n) {
+    throw std::invalid_argument("--information: expected 1 value (times the identity) or the " +
+                                std::to_string(n) + " values of the upper triangle for a " +
+                                std::to_string(dim) + "D graph, got " +
+                                std::to_string(values.size()));
+  }
+  Eigen::MatrixXd m(dim, dim);
+  std::size_t k = 0;
+  for (int r = 0; r < dim; ++r) {
+    for (int c = r; c < dim; ++c) m(r, c) = m(c, r) = values[k++];
+  }
+  return m;
+}
+
+void RunInject(InjectOptions o, std::ostream& out) {
+  ReadGraphOptions read_options;
+  read_options.format = *GraphFormatFromString(o.format);
+  AnyPoseGraph graph = ReadGraphFile(o.input, read_options).graph;
+  const int dim = std::holds_alternative<PoseGraph2>(graph) ? 3 : 6;
+  o.outliers.policy = *OutlierPolicyFromString(o.policy);
+  if (!o.information.empty()) o.outliers.information = InformationFromValues(o.information, dim);
+  const std::vector<InjectedClosure> injected = InjectOutliers(graph, o.outliers);
+  if (o.switchable) {
+    if (!(o.switch_prior_information > 0.0)) {
+      throw std::invalid_argument("--switch-prior-information must be > 0");
+    }
+    std::visit(
+        [&o](auto& g) {
+          g.AddSwitches([](const auto& c) { return !c.IsBetweenConsecutivePoses(); },
+                        SwitchPrior{1.0, o.switch_prior_information});
+        },
+        graph);
+  }
+  WriteG2oFile(graph, o.output);
+  const int groups = injected.empty() ? 0 : injected.back().group + 1;
+  out << "injected " << injected.size() << " false loop closures (" << o.policy << ", "
+      << groups << " group" << (groups == 1 ? "" : "s") << ", seed " << o.outliers.seed
+      << ") into " << o.input << "\nwrote " << o.output
+      << (o.switchable ? " (every loop closure switchable)" : "") << '\n';
+  if (!o.labels.empty()) {
+    WriteClosureLabelsFile(LabelClosures(graph, injected), o.labels);
+    out << "wrote " << o.labels << '\n';
+  }
+}
+
+}  // namespace
+
+void AddInjectCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<InjectOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "inject",
+      "Add false loop closures to a pose graph (Vertigo's protocol, 2D and 3D) and list "
+      "them in a labels file. The same seed gives the same file.");
+  cmd->add_option("input", o->input, "Pose-graph file (g2o, TORO, iSAM)")->required();
+  cmd->add_option("-o,--output", o->output, "Spoiled graph (g2o)")->required();
+  AddGraphFormatOption(*cmd, o->format);
+  cmd->add_option("--outliers", o->outliers.count, "Number of false edges")->required();
+  cmd->add_option("--policy", o->policy,
+                  "random, local (pairs at most --local-window apart), random-grouped, "
+                  "local-grouped, or hierarchical (a false visual closure and its "
+                  "odometry-inferred children)")
+      ->check(CLI::IsMember({"random", "local", "random-grouped", "local-grouped", "hierarchical"}))
+      ->capture_default_str();
+  cmd->add_option("--group-size", o->outliers.group_size,
+                  "Edges per group; 0 = the policy's default (1, or 5 for grouped and "
+                  "hierarchical)")
+      ->capture_default_str();
+  cmd->add_option("--local-window", o->outliers.local_window,
+                  "Largest pose-id gap of a local pair")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->outliers.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--information", o->information,
+                  "Information of the false edges: one value (times the identity) or the upper "
+                  "triangle as in g2o (6 values in 2D, 21 in 3D); default: copied from the "
+                  "first loop closure")
+      ->expected(1, 21);
+  cmd->add_flag("--switchable", o->switchable,
+                "Give every loop closure, true and false, a switch (Vertigo's switchable file)");
+  cmd->add_option("--switch-prior-information", o->switch_prior_information,
+                  "With --switchable: the switch priors' information (Vertigo uses 1)")
+      ->capture_default_str();
+  cmd->add_option("--labels", o->labels,
+                  "Write a CSV with every loop closure and whether it is false");
+  cmd->callback([o, &out] { RunInject(*o, out); });
+}
+
+}  // namespace catgraph

@@ -1,0 +1,142 @@
+// catgraph sweep --config FILE [-o CSV] [--jobs N] [--shard i/n] [--plot PREFIX]
+// catgraph sweep merge CSV... -o OUT [--plot PREFIX]
+// catgraph sweep plot CSV --prefix PREFIX
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "apps/commands.h"
+#include "apps/sweep.h"
+
+namespace catgraph {
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void OnInterrupt(int) {
+  g_stop.store(true);
+  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends at once
+}
+
+std::string Duration(double s) {
+  char buffer[32];
+  const long t = std::lround(s);
+  if (t >= 3600) std::snprintf(buffer, sizeof buffer, "%ldh%02ldm", t / 3600, (t / 60) % 60);
+  else std::snprintf(buffer, sizeof buffer, "%ldm%02lds", t / 60, t % 60);
+  return buffer;
+}
+
+// A bar redrawn in place on a terminal; on a pipe, one line per 10%.
+void ShowProgress(const SweepProgress& p) {
+  static std::size_t last_decile = 0;
+  const double fraction = static_cast<double>(p.done) / static_cast<double>(p.total);
+  const double eta = p.done > 0 ? p.elapsed_s / static_cast<double>(p.done) *
+                                      static_cast<double>(p.total - p.done)
+                                : 0.0;
+  const bool tty = ::isatty(STDERR_FILENO) != 0;
+  const std::size_t decile = static_cast<std::size_t>(fraction * 10.0);
+  if (!tty && decile == last_decile && p.done != p.total) return;
+  last_decile = decile;
+  constexpr int kWidth = 30;
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::fprintf(stderr, "%s[%s%s] %zu/%zu runs, %s elapsed, ETA %s%s", tty ? "\r" : "",
+               std::string(static_cast<std::size_t>(filled), '#').c_str(),
+               std::string(static_cast<std::size_t>(kWidth - filled), ' ').c_str(), p.done,
+               p.total, Duration(p.elapsed_s).c_str(), Duration(eta).c_str(),
+               tty && p.done != p.total ? "" : "\n");
+  std::fflush(stderr);
+}
+
+struct SweepCommandOptions {
+  std::string config, output, shard = "0/1", plot;
+  int jobs = 0;
+  bool quiet = false;
+  std::vector<std::string> merge_inputs;
+  std::string merge_output, merge_plot;
+  std::string plot_csv, plot_prefix;
+};
+
+void PrintWritten(const std::vector<std::filesystem::path>& files, std::ostream& out) {
+  for (const auto& f : files) out << "wrote " << f.string() << '\n';
+}
+
+void RunSweepCommand(const SweepCommandOptions& o, std::ostream& out) {
+  SweepConfig config = ReadSweepConfigFile(o.config);
+  if (!o.output.empty()) config.output = o.output;
+  if (config.output.empty()) {
+    throw std::invalid_argument("no output CSV: give -o or 'output' in " + o.config);
+  }
+  SweepOptions options;
+  options.shard = ParseShard(o.shard);
+  options.jobs = o.jobs;
+  if (!o.quiet) options.on_progress = ShowProgress;
+  g_stop.store(false);
+  options.stop = &g_stop;
+  const auto previous = std::signal(SIGINT, OnInterrupt);
+  SweepSummary s;
+  try {
+    s = RunSweep(config, options);
+  } catch (...) {
+    std::signal(SIGINT, previous);
+    throw;
+  }
+  std::signal(SIGINT, previous);
+  out << "sweep " << o.config << " (shard " << o.shard << "): " << s.planned << " runs, "
+      << s.resumed << " already in " << config.output.string() << ", " << s.finished
+      << " run now" << (s.failed ? " (" + std::to_string(s.failed) + " solver failures)" : "")
+      << '\n';
+  if (s.stopped) {
+    out << "interrupted: every finished run is in " << config.output.string()
+        << "; rerun the same command to resume\n";
+    throw std::runtime_error("sweep interrupted");
+  }
+  if (!o.plot.empty()) PrintWritten(PlotSweep(config.output, o.plot), out);
+}
+
+}  // namespace
+
+void AddSweepCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<SweepCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep",
+      "Run a false-positive experiment grid (datasets x policies x outlier counts x seeds x "
+      "methods) on every core, appending each finished run to a CSV; rerun to resume.");
+  cmd->add_option("--config", o->config, "Sweep configuration (JSON, or YAML: .yaml/.yml)");
+  cmd->add_option("-o,--output", o->output, "CSV of finished runs (default: 'output' of the config)");
+  cmd->add_option("--jobs", o->jobs, "Parallel runs; 0 = every core")->capture_default_str();
+  cmd->add_option("--shard", o->shard,
+                  "Run only slice i of n (0 <= i < n): run k belongs to shard k mod n")
+      ->capture_default_str();
+  cmd->add_option("--plot", o->plot,
+                  "When done, write PREFIX-<dataset>.png/.svg/.md from the CSV");
+  cmd->add_flag("--quiet", o->quiet, "No progress bar");
+
+  CLI::App* merge = cmd->add_subcommand("merge", "Merge shard CSVs into one (one row per run)");
+  merge->add_option("inputs", o->merge_inputs, "Shard CSVs")->required();
+  merge->add_option("-o,--output", o->merge_output, "Merged CSV")->required();
+  merge->add_option("--plot", o->merge_plot, "Also write PREFIX-<dataset>.png/.svg/.md");
+  merge->callback([o, &out] {
+    std::vector<std::filesystem::path> inputs(o->merge_inputs.begin(), o->merge_inputs.end());
+    MergeSweepCsv(inputs, o->merge_output);
+    out << "wrote " << o->merge_output << '\n';
+    if (!o->merge_plot.empty()) PrintWritten(PlotSweep(o->merge_output, o->merge_plot), out);
+  });
+
+  CLI::App* plot = cmd->add_subcommand("plot", "Plot and tabulate a sweep CSV");
+  plot->add_option("csv", o->plot_csv, "Sweep CSV")->required();
+  plot->add_option("--prefix", o->plot_prefix, "Writes PREFIX-<dataset>.png/.svg/.md")->required();
+  plot->callback([o, &out] { PrintWritten(PlotSweep(o->plot_csv, o->plot_prefix), out); });
+
+  cmd->callback([o, cmd, &out] {
+    if (!cmd->get_subcommands().empty()) return;  // merge or plot ran
+    if (o->config.empty()) throw CLI::RequiredError("--config");
+    RunSweepCommand(*o, out);
+  });
+}
+
+}  // namespace catgraph

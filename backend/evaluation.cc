@@ -1,0 +1,170 @@
+#include "backend/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+namespace catgraph {
+namespace {
+
+Eigen::Vector2d Position(const Pose2& p) { return {p.x(), p.y()}; }
+const Eigen::Vector3d& Position(const Pose3& p) { return p.translation(); }
+
+double RotationAngleOf(const Pose2& p) { return std::abs(p.theta()); }
+double RotationAngleOf(const Pose3& p) { return RotationAngle(p.rotation()); }
+
+// The rigid transform (rotation, translation) applied to a pose from the left.
+Pose2 RigidTransform(const Eigen::Matrix3d& t) {
+  return {t(0, 2), t(1, 2), std::atan2(t(1, 0), t(0, 0))};
+}
+Pose3 RigidTransform(const Eigen::Matrix4d& t) {
+  return {t.block<3, 1>(0, 3), Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0)))};
+}
+
+}  // namespace
+
+ErrorStatistics StatisticsOf(std::vector<double> errors) {
+  ErrorStatistics s;
+  s.count = errors.size();
+  if (errors.empty()) return s;
+  double sum = 0.0, sum_sq = 0.0;
+  for (double e : errors) {
+    sum += e;
+    sum_sq += e * e;
+    s.max = std::max(s.max, e);
+  }
+  const double n = static_cast<double>(errors.size());
+  s.mean = sum / n;
+  s.rmse = std::sqrt(sum_sq / n);
+  const std::size_t mid = errors.size() / 2;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(mid), errors.end());
+  s.median = errors[mid];
+  if (errors.size() % 2 == 0) {
+    const double lower = *std::max_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(mid));
+    s.median = 0.5 * (s.median + lower);
+  }
+  return s;
+}
+
+template <typename PoseT>
+TrajectoryEvaluation EvaluateTrajectory(const Trajectory<PoseT>& estimate,
+                                        const Trajectory<PoseT>& truth) {
+  constexpr int kDim = std::is_same_v<PoseT, Pose2> ? 2 : 3;
+  // Dynamic sizes: GCC 12 reports a false stringop-overread inside Eigen's
+  // umeyama() for fixed-row matrices.
+  using Positions = Eigen::MatrixXd;
+  if (estimate.size() < 2) {
+    throw std::invalid_argument("trajectory evaluation needs at least 2 poses, the estimate has " +
+                                std::to_string(estimate.size()));
+  }
+  std::vector<std::pair<PoseT, PoseT>> pairs;  // (estimate, truth), by id
+  pairs.reserve(estimate.size());
+  for (const auto& [id, pose] : estimate) {
+    const auto it = truth.find(id);
+    if (it == truth.end()) {
+      throw std::invalid_argument("pose " + std::to_string(id.value()) +
+                                  " of the estimate has no ground truth (the truth has " +
+                                  std::to_string(truth.size()) + " poses)");
+    }
+    pairs.emplace_back(pose, it->second);
+  }
+  const auto n = static_cast<Eigen::Index>(pairs.size());
+  Positions est(kDim, n), gt(kDim, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    est.col(k) = Position(pairs[static_cast<std::size_t>(k)].first);
+    gt.col(k) = Position(pairs[static_cast<std::size_t>(k)].second);
+  }
+
+  TrajectoryEvaluation result;
+  result.poses = pairs.size();
+  const Eigen::MatrixXd transform = Eigen::umeyama(est, gt, /*with_scaling=*/false);
+  const PoseT align = RigidTransform(Eigen::Matrix<double, kDim + 1, kDim + 1>(transform));
+  const PoseT anchor = pairs.front().second * pairs.front().first.Inverse();
+  std::vector<double> ate, anchored, rpe_t, rpe_r;
+  for (const auto& [e, g] : pairs) {
+    ate.push_back((Position(align * e) - Position(g)).norm());
+    anchored.push_back((Position(anchor * e) - Position(g)).norm());
+  }
+  for (std::size_t k = 0; k + 1 < pairs.size(); ++k) {
+    const PoseT d_est = pairs[k].first.Between(pairs[k + 1].first);
+    const PoseT d_gt = pairs[k].second.Between(pairs[k + 1].second);
+    const PoseT error = d_gt.Between(d_est);
+    rpe_t.push_back(Position(error).norm());
+    rpe_r.push_back(RotationAngleOf(error));
+  }
+  result.ate_m = StatisticsOf(std::move(ate));
+  result.rmse_anchored_m = StatisticsOf(std::move(anchored)).rmse;
+  result.rpe_translation_m = StatisticsOf(std::move(rpe_t));
+  result.rpe_rotation_rad = StatisticsOf(std::move(rpe_r));
+  return result;
+}
+
+template TrajectoryEvaluation EvaluateTrajectory(const Trajectory2&, const Trajectory2&);
+template TrajectoryEvaluation EvaluateTrajectory(const Trajectory3&, const Trajectory3&);
+
+TrajectoryEvaluation EvaluateTrajectory(const AnyTrajectory& estimate, const AnyTrajectory& truth) {
+  return std::visit(
+      [&truth](const auto& est) {
+        using PoseT = typename std::decay_t<decltype(est)>::mapped_type;
+        const Trajectory<PoseT> gt =
+            std::visit([](const auto& t) { return ConvertTrajectory<PoseT>(t); }, truth);
+        return EvaluateTrajectory(est, gt);
+      },
+      estimate);
+}
+
+std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
+  return std::visit(
+      [](const auto& g) {
+        std::vector<ClosureOutcome> outcomes;
+        for (const auto& c : g.constraints) {
+          if (c.IsBetweenConsecutivePoses()) continue;
+          const bool on = !c.switch_id || g.switches.at(*c.switch_id).value > 0.5;
+          outcomes.push_back({c.from, c.to, on});
+        }
+        return outcomes;
+      },
+      graph);
+}
+
+ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
+                            const std::vector<ClosureLabel>& labels) {
+  using Pair = std::pair<std::int64_t, std::int64_t>;
+  auto key = [](PoseId a, PoseId b) {
+    return a.value() <= b.value() ? Pair(a.value(), b.value()) : Pair(b.value(), a.value());
+  };
+  std::map<Pair, std::deque<bool>> by_pair;
+  for (const ClosureOutcome& o : outcomes) by_pair[key(o.from, o.to)].push_back(o.accepted);
+  ClosureScores s;
+  for (const ClosureLabel& label : labels) {
+    bool accepted = false;
+    auto it = by_pair.find(key(label.from, label.to));
+    if (it != by_pair.end() && !it->second.empty()) {
+      accepted = it->second.front();
+      it->second.pop_front();
+    }
+    if (label.outlier) {
+      ++(accepted ? s.false_positives : s.true_negatives);
+    } else {
+      ++(accepted ? s.true_positives : s.false_negatives);
+    }
+  }
+  const double tp = static_cast<double>(s.true_positives);
+  if (s.true_positives + s.false_positives > 0) {
+    s.precision = tp / static_cast<double>(s.true_positives + s.false_positives);
+  }
+  if (s.true_positives + s.false_negatives > 0) {
+    s.recall = tp / static_cast<double>(s.true_positives + s.false_negatives);
+  }
+  s.f1 = s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall)
+                                      : 0.0;
+  return s;
+}
+
+}  // namespace catgraph

@@ -1,0 +1,84 @@
+// Scoring an estimate against ground truth: trajectory error (ATE, anchored
+// RMSE, RPE) and the precision and recall of the loop closures a robust back
+// end accepted. The definitions follow robust-backend-notes.md §2 and the TUM
+// benchmark (Sturm et al. 2012); docs/evaluation.md spells them out.
+#ifndef CATGRAPH_BACKEND_EVALUATION_H_
+#define CATGRAPH_BACKEND_EVALUATION_H_
+
+#include <cstddef>
+#include <vector>
+
+#include "backend/graph/closure_label.h"
+#include "backend/graph/pose_graph.h"
+#include "backend/graph/trajectory.h"
+
+namespace catgraph {
+
+// Summary of a list of non-negative errors; all zero for an empty list.
+struct ErrorStatistics {
+  std::size_t count = 0;
+  double rmse = 0.0;
+  double mean = 0.0;
+  double median = 0.0;
+  double max = 0.0;
+};
+
+ErrorStatistics StatisticsOf(std::vector<double> errors);
+
+struct TrajectoryEvaluation {
+  std::size_t poses = 0;  // poses compared: every pose of the estimate
+  // Absolute trajectory error: position error after the rigid SE(2)/SE(3)
+  // alignment (no scale) of the estimate's positions onto the truth's that
+  // minimises it (Umeyama 1991).
+  ErrorStatistics ate_m;
+  // Position RMSE after moving the estimate so that its first pose coincides
+  // with the truth's first pose (position and orientation).
+  double rmse_anchored_m = 0.0;
+  // Relative pose error between consecutive poses (by id): the translation
+  // and rotation of (T_truth_k^-1 T_truth_k+1)^-1 (T_est_k^-1 T_est_k+1).
+  ErrorStatistics rpe_translation_m;
+  ErrorStatistics rpe_rotation_rad;
+};
+
+// Every pose of `estimate` must be in `truth` (extra truth poses are
+// ignored); throws std::invalid_argument naming the first missing id, or for
+// fewer than 2 poses. A 3D truth of a 2D estimate (or the reverse) is
+// converted as trajectory.h does.
+template <typename PoseT>
+TrajectoryEvaluation EvaluateTrajectory(const Trajectory<PoseT>& estimate,
+                                        const Trajectory<PoseT>& truth);
+TrajectoryEvaluation EvaluateTrajectory(const AnyTrajectory& estimate, const AnyTrajectory& truth);
+
+// What the back end decided about one loop closure of its output.
+struct ClosureOutcome {
+  PoseId from, to;
+  bool accepted = true;
+};
+
+// The loop closures of an optimised graph: accepted unless switched off
+// (switch <= 0.5). Constraints between consecutive poses are not loop closures.
+std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph);
+
+struct ClosureScores {
+  std::size_t true_positives = 0;   // inliers accepted
+  std::size_t false_positives = 0;  // outliers accepted
+  std::size_t true_negatives = 0;   // outliers rejected
+  std::size_t false_negatives = 0;  // inliers rejected
+  // TP / (TP + FP); 1 when nothing was accepted (no false acceptance).
+  double precision = 1.0;
+  // TP / (TP + FN); 1 when there is no inlier.
+  double recall = 1.0;
+  double f1 = 1.0;  // harmonic mean of precision and recall; 0 when both are 0
+};
+
+// Matches every label to the first unused outcome with the same endpoints
+// (either direction), in order, so that a false edge duplicating a true
+// closure's endpoints is told apart by position, as inject appends it after
+// the original. A label without an outcome counts as rejected (an output
+// written with rejected closures dropped).
+ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
+                            const std::vector<ClosureLabel>& labels);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_EVALUATION_H_
