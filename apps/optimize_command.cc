@@ -41,7 +41,10 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["chi2"] = r.chi2;
   j["cost"] = o.cost;
   j["chordal_cost"] = r.chordal_cost;
-  j["time_s"] = r.summary.time_s;
+  j["time_s"] = r.summary.time_s + (r.refinement ? r.refinement->time_s : 0.0);
+  j["refined"] = r.refinement.has_value();
+  j["refine_iterations"] = r.refinement ? r.refinement->iterations : 0;
+  j["refine_time_s"] = r.refinement ? r.refinement->time_s : 0.0;
   j["accepted"] = r.accepted;
   j["rejected"] = r.rejected;
   if (with_closures) {
@@ -83,6 +86,9 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
   }
   out << "optimised " << options.input << " with " << options.method << ": "
       << result.summary.BriefReport() << '\n'
+      << (result.refinement ? "refined without the rejected closures: " +
+                                   result.refinement->BriefReport() + "\n"
+                             : std::string())
       << "chi2 " << result.chi2 << ", chordal cost " << result.chordal_cost << "; loop closures: " << result.accepted << " accepted, "
       << result.rejected << " rejected\n"
       << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "")
@@ -134,6 +140,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_flag("--robust-odometry", o->optimizer.robust_odometry,
                 "Apply the robust method to odometry too");
+  cmd->add_flag("--no-refine{false}", o->optimizer.refine,
+                "Keep the robust solve's poses instead of re-solving them with the rejected "
+                "closures removed and the accepted ones at full weight");
   cmd->add_option("--max-iterations", o->optimizer.solver.max_iterations,
                   "Levenberg-Marquardt iterations")
       ->capture_default_str();

@@ -81,7 +81,7 @@ OutlierOptions OutlierOptionsFor(const SweepConfig& c, OutlierPolicy policy, int
 SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& base) {
   static const std::set<std::string> kKeys = {
       "datasets", "methods",  "policies",       "outliers",          "seeds",  "group_size",
-      "local_window", "init", "max_iterations", "switch_gate_probability", "output"};
+      "local_window", "init", "max_iterations", "switch_gate_probability", "refine", "output"};
   if (!j.is_object()) throw std::invalid_argument("expected a mapping of sweep settings");
   for (const auto& [key, value] : j.items()) {
     if (!kKeys.contains(key)) throw std::invalid_argument("unknown key '" + key + "'");
@@ -142,6 +142,7 @@ SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& ba
   c.optimizer.solver.max_iterations = j.value("max_iterations", c.optimizer.solver.max_iterations);
   c.optimizer.switch_gate_probability =
       j.value("switch_gate_probability", c.optimizer.switch_gate_probability);
+  c.optimizer.refine = j.value("refine", c.optimizer.refine);
   if (j.contains("output")) c.output = path_of(j.at("output").get<std::string>());
   Validate(c.optimizer);
   for (OutlierPolicy p : c.policies) Validate(OutlierOptionsFor(c, p, 0, 1));
@@ -287,7 +288,9 @@ RunResult Run(const SweepRun& run, const SweepConfig& config, const LoadedDatase
       run.dataset, std::string(ToString(run.policy)), std::to_string(run.outliers),
       std::to_string(run.seed), std::string(ToString(run.method)),
       std::to_string(GroupSize(outliers)), usable ? "ok" : "failed",
-      std::to_string(result.summary.iterations), FormatDouble(result.summary.time_s),
+      std::to_string(result.summary.iterations),
+      std::to_string(result.refinement ? result.refinement->iterations : 0),
+      FormatDouble(result.summary.time_s + (result.refinement ? result.refinement->time_s : 0.0)),
       FormatDouble(result.chi2), std::to_string(result.accepted), std::to_string(result.rejected),
       ate, anchored, FormatDouble(scores.precision), FormatDouble(scores.recall),
       FormatDouble(scores.f1), std::to_string(scores.true_positives),
@@ -402,7 +405,7 @@ Shard ParseShard(const std::string& text) {
 const std::vector<std::string>& SweepColumns() {
   static const std::vector<std::string> kColumns = {
       "dataset",  "policy",        "outliers",  "seed",           "method",
-      "group_size", "status",      "iterations", "time_s",        "chi2",
+      "group_size", "status",      "iterations", "refine_iterations", "time_s", "chi2",
       "accepted", "rejected",      "ate_rmse",  "rmse_anchored",  "precision",
       "recall",   "f1",            "true_positives", "false_positives", "true_negatives",
       "false_negatives"};

@@ -133,16 +133,30 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
   }
 
+  // The poses and the gauge, shared by the robust solve and the refinement.
+  auto add_poses = [&graph](FactorGraph& factors, Values& values) {
+    for (const auto& [id, v] : graph.vertices) {
+      values.Insert(id, *v.pose);
+      if (v.fixed) factors.SetConstant(PoseKey(id));
+    }
+    if (std::none_of(graph.vertices.begin(), graph.vertices.end(),
+                     [](const auto& v) { return v.second.fixed; })) {
+      factors.SetConstant(PoseKey(graph.vertices.begin()->first));  // gauge
+    }
+  };
+  auto take_poses = [&graph](const Values& values) {
+    for (auto& [id, v] : graph.vertices) {
+      if constexpr (std::is_same_v<PoseT, Pose2>) {
+        v.pose = values.AtPose2(id);
+      } else {
+        v.pose = values.AtPose3(id);
+      }
+    }
+  };
+
   Values initial;
   FactorGraph factors;
-  for (const auto& [id, v] : graph.vertices) {
-    initial.Insert(id, *v.pose);
-    if (v.fixed) factors.SetConstant(PoseKey(id));
-  }
-  if (std::none_of(graph.vertices.begin(), graph.vertices.end(),
-                   [](const auto& v) { return v.second.fixed; })) {
-    factors.SetConstant(PoseKey(graph.vertices.begin()->first));  // gauge
-  }
+  add_poses(factors, initial);
   for (const auto& [id, s] : graph.switches) {
     initial.Insert(id, s.value);
     if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
@@ -157,14 +171,8 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     }
   }
 
-  OptimizationResult solved = Optimize(factors, initial, options.solver);
-  for (auto& [id, v] : graph.vertices) {
-    if constexpr (std::is_same_v<PoseT, Pose2>) {
-      v.pose = solved.values.AtPose2(id);
-    } else {
-      v.pose = solved.values.AtPose3(id);
-    }
-  }
+  const OptimizationResult solved = Optimize(factors, initial, options.solver);
+  take_poses(solved.values);
   for (auto& [id, s] : graph.switches) s.value = solved.values.AtSwitch(id);
 
   PoseGraphOptimization out;
@@ -182,6 +190,28 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     out.closures.push_back(d);
   }
   out.summary = solved.summary;
+
+  // Refinement: the decisions stand; the poses are re-solved by plain least
+  // squares over the odometry and the accepted closures at full weight, so
+  // that the residual pull of rejected closures (weight up to 0.5) and the
+  // down-weighting of accepted ones leave no bias in the map.
+  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
+  if (options.refine && robust_solve && out.summary.IsUsable()) {
+    std::set<ClosureId> rejected;
+    for (const ClosureDecision& d : out.closures) {
+      if (!d.accepted) rejected.insert(d.id);
+    }
+    Values start;
+    FactorGraph refine;
+    add_poses(refine, start);
+    for (const auto& c : graph.constraints) {
+      if (rejected.contains(c.id)) continue;
+      refine.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options.cost);
+    }
+    const OptimizationResult refined = Optimize(refine, start, options.solver);
+    if (refined.summary.IsUsable()) take_poses(refined.values);
+    out.refinement = refined.summary;
+  }
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
   out.graph = std::move(graph);

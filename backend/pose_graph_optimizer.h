@@ -62,6 +62,12 @@ struct PoseGraphOptimizerOptions {
   // Huber / Cauchy: the residual norm, in sigmas, where the loss bends; > 0.
   double loss_scale_sigma = 1.0;
   bool robust_odometry = false;  // also apply the method to odometry
+  // After a robust solve (any method but none, or a file with switches), keep
+  // its decisions and re-solve the poses by plain least squares without the
+  // rejected closures and with the accepted ones at full weight. A rejected
+  // closure keeps a weight of up to 0.5 in the robust solve, and 1000 of
+  // them move Manhattan's ATE from 0.79 m to 1.12 m; refined, 0.79 m.
+  bool refine = true;
   OptimizerOptions solver;
 };
 
@@ -82,7 +88,10 @@ struct PoseGraphOptimization {
   // The input with optimised poses; with switches (new and old) and their
   // solved values; new switches are attached to their constraints.
   AnyPoseGraph graph;
-  Summary summary;
+  Summary summary;  // the robust solve
+  // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
+  // If it failed, `graph` holds the robust solve's poses.
+  std::optional<Summary> refinement;
   std::vector<ClosureDecision> closures;  // every loop closure, in graph order
   std::size_t accepted = 0;
   std::size_t rejected = 0;

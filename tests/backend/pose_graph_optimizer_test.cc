@@ -115,6 +115,49 @@ TEST_CASE("switchable constraints with the default gate reject injected closures
   CHECK(fixed.rejected > true_closures / 2);
 }
 
+TEST_CASE("refinement gives the plain optimum of the graph without the rejected closures",
+          "[backend][refine]") {
+  ManhattanWorldOptions world;
+  world.num_poses = 400;
+  world.seed = 12;
+  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
+  OutlierOptions outliers;
+  outliers.count = 60;
+  outliers.seed = 5;
+  InjectOutliers(sim.graph, outliers);
+  for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
+    PoseGraphOptimizerOptions options;
+    options.method = method;
+    const PoseGraphOptimization refined = OptimizePoseGraph(sim.graph, options);
+    REQUIRE(refined.refinement);
+    REQUIRE(refined.refinement->IsUsable());
+    options.refine = false;
+    const PoseGraphOptimization raw = OptimizePoseGraph(sim.graph, options);
+    CHECK(!raw.refinement);
+    // The same decisions ...
+    REQUIRE(raw.closures.size() == refined.closures.size());
+    for (std::size_t k = 0; k < raw.closures.size(); ++k) {
+      CHECK(raw.closures[k].accepted == refined.closures[k].accepted);
+    }
+    // ... and the poses of a plain solve without the rejected closures.
+    PoseGraphOptimizerOptions plain;
+    plain.method = RobustMethod::kNone;
+    const PoseGraphOptimization reference =
+        OptimizePoseGraph(DropRejected(raw.graph, raw.closures), plain);
+    const auto& got = std::get<PoseGraph2>(refined.graph).vertices;
+    const auto& want = std::get<PoseGraph2>(reference.graph).vertices;
+    double largest_m = 0.0;
+    for (const auto& [id, v] : want) {
+      largest_m = std::max(largest_m, (Eigen::Vector2d(v.pose->x(), v.pose->y()) -
+                                       Eigen::Vector2d(got.at(id).pose->x(), got.at(id).pose->y()))
+                                          .norm());
+    }
+    CAPTURE(ToString(method));
+    CHECK(largest_m < 1e-5);
+    CHECK(Chi2(reference.graph) < Chi2(raw.graph));
+  }
+}
+
 TEST_CASE("chordal initialisation recovers exact poses from exact measurements",
           "[backend][init]") {
   ManhattanWorldOptions options;
