@@ -107,7 +107,7 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("-o,--output", o->output, "Corrected graph (g2o)")->required();
   AddGraphFormatOption(*cmd, o->format);
   cmd->add_option("--method", o->method, "Robust method for loop closures")
-      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber"}))
+      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
       ->capture_default_str();
   cmd->add_option("--init", o->init,
                   "Initial guess: the file's poses (missing ones chained along a spanning "
@@ -137,6 +137,8 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--dcs-phi", o->optimizer.dcs_phi, "DCS Phi")->capture_default_str();
   cmd->add_option("--loss-scale", o->optimizer.loss_scale_sigma,
                   "Huber/Cauchy scale in sigmas")
+      ->capture_default_str();
+  cmd->add_option("--gnc-mu-step", o->optimizer.gnc_mu_step, "GNC: growth of mu per round")
       ->capture_default_str();
   cmd->add_flag("--robust-odometry", o->optimizer.robust_odometry,
                 "Apply the robust method to odometry too");

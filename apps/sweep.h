@@ -29,7 +29,7 @@ struct SweepConfig {
   std::vector<SweepDataset> datasets;
   std::vector<RobustMethod> methods = {RobustMethod::kNone, RobustMethod::kSwitchable,
                                        RobustMethod::kDcs, RobustMethod::kCauchy,
-                                       RobustMethod::kHuber};
+                                       RobustMethod::kHuber, RobustMethod::kGnc};
   std::vector<OutlierPolicy> policies = {OutlierPolicy::kRandom, OutlierPolicy::kLocal,
                                          OutlierPolicy::kRandomGrouped,
                                          OutlierPolicy::kLocalGrouped};

@@ -80,6 +80,8 @@ std::unique_ptr<ceres::LossFunction> NewLoss(const RobustLoss& loss) {
     case RobustLoss::Type::kHuber: return std::make_unique<ceres::HuberLoss>(loss.scale);
     case RobustLoss::Type::kCauchy: return std::make_unique<ceres::CauchyLoss>(loss.scale);
     case RobustLoss::Type::kDcs: return std::make_unique<DcsLoss>(loss.scale);
+    case RobustLoss::Type::kScaled:
+      return std::make_unique<ceres::ScaledLoss>(nullptr, loss.scale, ceres::TAKE_OWNERSHIP);
   }
   return nullptr;
 }

@@ -19,10 +19,11 @@ enum class SwitchFunction { kLinear, kSigmoid };
 
 // A robust loss applied to a factor's squared residual norm.
 struct RobustLoss {
-  enum class Type { kNone, kHuber, kCauchy, kDcs };
+  enum class Type { kNone, kHuber, kCauchy, kDcs, kScaled };
   Type type = Type::kNone;
   // Huber / Cauchy: the residual norm (in sigmas) where the loss bends.
   // DCS: Phi, the chi2 beyond which the edge is down-weighted.
+  // Scaled: the weight w of rho(chi2) = w chi2 (GNC's weighted least squares).
   double scale = 1.0;
 };
 

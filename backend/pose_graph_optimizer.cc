@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -15,12 +16,13 @@
 namespace catgraph {
 namespace {
 
-constexpr NameTable<RobustMethod, 5> kMethodNames = {{
+constexpr NameTable<RobustMethod, 6> kMethodNames = {{
     {RobustMethod::kNone, "none"},
     {RobustMethod::kSwitchable, "switchable"},
     {RobustMethod::kDcs, "dcs"},
     {RobustMethod::kCauchy, "cauchy"},
     {RobustMethod::kHuber, "huber"},
+    {RobustMethod::kGnc, "gnc"},
 }};
 
 template <typename PoseT>
@@ -93,6 +95,7 @@ RobustLoss LossFor(const PoseGraphOptimizerOptions& o) {
 double LossDerivative(const RobustLoss& loss, double chi2) {
   switch (loss.type) {
     case RobustLoss::Type::kNone: return 1.0;
+    case RobustLoss::Type::kScaled: return loss.scale;
     case RobustLoss::Type::kDcs: return DcsLoss::SquaredWeight(loss.scale, chi2);
     case RobustLoss::Type::kHuber: {
       const double b = loss.scale * loss.scale;
@@ -112,6 +115,70 @@ constexpr NameTable<InitialGuess, 3> kInitialGuessNames = {{
     {InitialGuess::kChordal, "chordal"},
 }};
 
+// Truncated least squares by graduated non-convexity (Yang, Antonante,
+// Tzoumas, Carlone, RA-L 2020, Algorithm 1 with the TLS surrogate). With the
+// threshold cbar^2 (the chi2 gate) and the residuals r^2 = chi2 of the
+// robust closures: start from all weights 1, mu0 = cbar^2 / (2 max r^2 -
+// cbar^2); each round solves the weighted problem from the last poses, then
+//   w = 1                               r^2 <= mu/(mu+1) cbar^2
+//   w = 0                               r^2 >= (mu+1)/mu cbar^2
+//   w = cbar/r sqrt(mu (mu+1)) - mu     otherwise
+// and grows mu by `gnc_mu_step`, until the weights are binary (sum w(1-w) <
+// 1e-6) or unchanged, or `gnc_max_rounds` solves, each after the first
+// limited to `gnc_round_iterations`. Returns the summary of all rounds.
+template <typename PoseT, typename Solve>
+Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& options,
+                 std::map<ClosureId, double>& weights, Solve& solve) {
+  const double cbar2 = ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
+  std::map<ClosureId, const Constraint<PoseT>*> closures;
+  for (const auto& c : graph.constraints) {
+    if (weights.contains(c.id)) closures[c.id] = &c;
+  }
+  Summary total;
+  double mu = 0.0;
+  int round = 0;
+  for (; round < options.gnc_max_rounds; ++round) {
+    // The first round is the plain least-squares solve; later rounds start
+    // from the previous poses and need few iterations.
+    const Summary s = solve(&weights, round == 0 ? options.solver.max_iterations
+                                                 : options.gnc_round_iterations);
+    if (round == 0) {
+      total = s;
+    } else {
+      total.iterations += s.iterations;
+      total.time_s += s.time_s;
+      total.final_cost = s.final_cost;
+      total.termination = s.termination;
+      total.message = s.message;
+    }
+    if (!s.IsUsable()) break;
+    double max_r2 = 0.0;
+    std::map<ClosureId, double> r2;
+    for (const auto& [id, c] : closures) max_r2 = std::max(max_r2, r2[id] = EdgeChi2(graph, *c));
+    if (round == 0) {
+      if (max_r2 <= cbar2) break;  // every closure is an inlier: least squares is the answer
+      mu = cbar2 / (2.0 * max_r2 - cbar2);
+    }
+    double change = 0.0, undecided = 0.0;
+    for (auto& [id, w] : weights) {
+      const double r = r2.at(id);
+      double next = 0.0;
+      if (r <= mu / (mu + 1.0) * cbar2) {
+        next = 1.0;
+      } else if (r < (mu + 1.0) / mu * cbar2) {
+        next = std::sqrt(cbar2 / r) * std::sqrt(mu * (mu + 1.0)) - mu;
+      }
+      change = std::max(change, std::abs(next - w));
+      undecided += next * (1.0 - next);
+      w = next;
+    }
+    mu *= options.gnc_mu_step;
+    if (undecided < 1e-6 && change < 1e-9) break;
+  }
+  total.message = "GNC: " + std::to_string(round + 1) + " weighted solves; last: " + total.message;
+  return total;
+}
+
 template <typename PoseT>
 PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
   switch (options.initial_guess) {
@@ -119,6 +186,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     case InitialGuess::kSpanningTree: InitializeBySpanningTree(graph, /*overwrite=*/true); break;
     case InitialGuess::kChordal: InitializeChordal(graph); break;
   }
+  const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
   const bool switchable = options.method == RobustMethod::kSwitchable;
   const RobustLoss loss = LossFor(options);
   auto robust = [&](const Constraint<PoseT>& c) {
@@ -134,8 +202,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   }
 
   // The poses and the gauge, shared by the robust solve and the refinement.
-  auto add_poses = [&graph](FactorGraph& factors, Values& values) {
-    for (const auto& [id, v] : graph.vertices) {
+  auto add_poses = [&graph](FactorGraph& factors, Values& values,
+                            const std::map<PoseId, Vertex<PoseT>>& poses) {
+    for (const auto& [id, v] : poses) {
       values.Insert(id, *v.pose);
       if (v.fixed) factors.SetConstant(PoseKey(id));
     }
@@ -154,26 +223,48 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     }
   };
 
-  Values initial;
-  FactorGraph factors;
-  add_poses(factors, initial);
-  for (const auto& [id, s] : graph.switches) {
-    initial.Insert(id, s.value);
-    if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
-  }
-  for (const auto& c : graph.constraints) {
-    if (c.switch_id) {
-      factors.Emplace<SwitchableBetweenFactor<PoseT>>(c.from, c.to, *c.switch_id, c.measurement,
-                                                      options.switch_function);
-    } else {
-      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement,
-                                            robust(c) ? loss : RobustLoss{}, options.cost);
+  // One solve of the whole graph; `gnc_weights`, when given, scales each
+  // robust closure's chi2 (a zero weight leaves the closure out).
+  auto solve = [&](const std::map<ClosureId, double>* gnc_weights, int max_iterations) {
+    Values initial;
+    FactorGraph factors;
+    add_poses(factors, initial, graph.vertices);
+    for (const auto& [id, s] : graph.switches) {
+      initial.Insert(id, s.value);
+      if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
     }
-  }
+    for (const auto& c : graph.constraints) {
+      if (c.switch_id) {
+        factors.Emplace<SwitchableBetweenFactor<PoseT>>(c.from, c.to, *c.switch_id,
+                                                        c.measurement, options.switch_function);
+        continue;
+      }
+      RobustLoss edge_loss = robust(c) ? loss : RobustLoss{};
+      if (gnc_weights && robust(c)) {
+        const double w = gnc_weights->at(c.id);
+        if (w == 0.0) continue;
+        edge_loss = {RobustLoss::Type::kScaled, w};
+      }
+      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, edge_loss, options.cost);
+    }
+    OptimizerOptions solver = options.solver;
+    solver.max_iterations = std::min(solver.max_iterations, max_iterations);
+    OptimizationResult solved = Optimize(factors, initial, solver);
+    take_poses(solved.values);
+    for (auto& [id, s] : graph.switches) s.value = solved.values.AtSwitch(id);
+    return solved.summary;
+  };
 
-  const OptimizationResult solved = Optimize(factors, initial, options.solver);
-  take_poses(solved.values);
-  for (auto& [id, s] : graph.switches) s.value = solved.values.AtSwitch(id);
+  std::map<ClosureId, double> gnc_weights;
+  Summary summary;
+  if (options.method == RobustMethod::kGnc) {
+    for (const auto& c : graph.constraints) {
+      if (!c.switch_id && robust(c)) gnc_weights[c.id] = 1.0;
+    }
+    summary = SolveGnc(graph, options, gnc_weights, solve);
+  } else {
+    summary = solve(nullptr, options.solver.max_iterations);
+  }
 
   PoseGraphOptimization out;
   for (const auto& c : graph.constraints) {
@@ -182,6 +273,8 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     if (c.switch_id) {
       const double s = graph.switches.at(*c.switch_id).value;
       d.weight = options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
+    } else if (options.method == RobustMethod::kGnc && robust(c)) {
+      d.weight = gnc_weights.at(c.id);
     } else if (robust(c)) {
       d.weight = std::sqrt(LossDerivative(loss, EdgeChi2(graph, c)));
     }
@@ -189,28 +282,49 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     (d.accepted ? out.accepted : out.rejected) += 1;
     out.closures.push_back(d);
   }
-  out.summary = solved.summary;
+  out.summary = summary;
 
   // Refinement: the decisions stand; the poses are re-solved by plain least
   // squares over the odometry and the accepted closures at full weight, so
   // that the residual pull of rejected closures (weight up to 0.5) and the
-  // down-weighting of accepted ones leave no bias in the map.
+  // down-weighting of accepted ones leave no bias in the map. It starts from
+  // the robust solution and from the initial guess and keeps the lower cost:
+  // a method that decides right on a map its early rounds folded (GNC after
+  // a least-squares start among outliers) ends in a poor local minimum,
+  // which the initial guess avoids.
   const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
   if (options.refine && robust_solve && out.summary.IsUsable()) {
     std::set<ClosureId> rejected;
     for (const ClosureDecision& d : out.closures) {
       if (!d.accepted) rejected.insert(d.id);
     }
-    Values start;
-    FactorGraph refine;
-    add_poses(refine, start);
-    for (const auto& c : graph.constraints) {
-      if (rejected.contains(c.id)) continue;
-      refine.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options.cost);
+    std::optional<OptimizationResult> best;
+    double time_s = 0.0;
+    using Poses = std::map<PoseId, Vertex<PoseT>>;
+    const Poses* starts[] = {&graph.vertices, &initial_poses};
+    for (const Poses* start_poses : starts) {
+      Values start;
+      FactorGraph refine;
+      add_poses(refine, start, *start_poses);
+      for (const auto& c : graph.constraints) {
+        if (rejected.contains(c.id)) continue;
+        refine.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{},
+                                             options.cost);
+      }
+      OptimizationResult refined = Optimize(refine, start, options.solver);
+      time_s += refined.summary.time_s;
+      if (refined.summary.IsUsable() &&
+          (!best || refined.summary.final_cost < best->summary.final_cost)) {
+        best = std::move(refined);
+      } else if (!best && !out.refinement) {
+        out.refinement = refined.summary;  // reported if neither start succeeds
+      }
     }
-    const OptimizationResult refined = Optimize(refine, start, options.solver);
-    if (refined.summary.IsUsable()) take_poses(refined.values);
-    out.refinement = refined.summary;
+    if (best) {
+      take_poses(best->values);
+      out.refinement = best->summary;
+    }
+    out.refinement->time_s = time_s;
   }
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
@@ -249,6 +363,17 @@ std::optional<InitialGuess> InitialGuessFromString(std::string_view text) {
 void Validate(const PoseGraphOptimizerOptions& o) {
   if (!(o.switch_prior_information >= 0.0)) {
     throw std::invalid_argument("switch_prior_information must be >= 0 (0: use the gate)");
+  }
+  if (!(o.gnc_mu_step > 1.0)) {
+    throw std::invalid_argument("gnc_mu_step must be > 1, got " + std::to_string(o.gnc_mu_step));
+  }
+  if (o.gnc_round_iterations < 1) {
+    throw std::invalid_argument("gnc_round_iterations must be >= 1, got " +
+                                std::to_string(o.gnc_round_iterations));
+  }
+  if (o.gnc_max_rounds < 1) {
+    throw std::invalid_argument("gnc_max_rounds must be >= 1, got " +
+                                std::to_string(o.gnc_max_rounds));
   }
   if (!(o.switch_gate_probability > 0.0 && o.switch_gate_probability < 1.0)) {
     throw std::invalid_argument("switch_gate_probability must be in (0, 1)");

@@ -25,6 +25,7 @@ enum class RobustMethod {
   kDcs,         // dynamic covariance scaling (Agarwal et al. 2013)
   kCauchy,      // Ceres' Cauchy loss
   kHuber,       // Ceres' Huber loss
+  kGnc,         // truncated least squares by graduated non-convexity (Yang et al. 2020)
 };
 
 std::string_view ToString(RobustMethod method);
@@ -61,6 +62,11 @@ struct PoseGraphOptimizerOptions {
   double dcs_phi = 1.0;
   // Huber / Cauchy: the residual norm, in sigmas, where the loss bends; > 0.
   double loss_scale_sigma = 1.0;
+  // GNC: mu grows by this factor per round (Yang et al. use 1.4); > 1. The
+  // truncation threshold is the same chi2 gate as the switch prior's.
+  double gnc_mu_step = 1.4;
+  int gnc_max_rounds = 100;  // weighted solves at most; >= 1
+  int gnc_round_iterations = 50;  // LM iterations per solve after the first; >= 1
   bool robust_odometry = false;  // also apply the method to odometry
   // After a robust solve (any method but none, or a file with switches), keep
   // its decisions and re-solve the poses by plain least squares without the
@@ -79,7 +85,8 @@ struct ClosureDecision {
   PoseId from, to;
   ClosureKind kind = ClosureKind::kUnknown;
   // What the residual is scaled by: the switch Psi(s), or sqrt(rho'(chi2))
-  // for a robust loss (DCS: its scale min(1, 2 Phi / (Phi + chi2))); 1 for `none`.
+  // for a robust loss (DCS: its scale min(1, 2 Phi / (Phi + chi2))), GNC's
+  // final weight; 1 for `none`.
   double weight = 1.0;
   bool accepted = true;  // weight > 0.5
 };

@@ -47,10 +47,10 @@ TEST_CASE("the grid is the full product in a fixed order and shards partition it
   SweepConfig c;
   c.datasets = {{"a", "a.g2o", ""}, {"b", "b.g2o", ""}};
   const std::vector<SweepRun> grid = SweepGrid(c);
-  CHECK(grid.size() == 2 * 4 * 5 * 5 * 5);
+  CHECK(grid.size() == 2 * 4 * 5 * 5 * 6);
   CHECK(grid.front().Key() == "a,random,0,1,none");
   CHECK(grid[1].Key() == "a,random,0,1,switchable");
-  CHECK(grid.back().Key() == "b,local-grouped,1000,5,huber");
+  CHECK(grid.back().Key() == "b,local-grouped,1000,5,gnc");
   std::set<std::string> keys;
   for (const SweepRun& r : grid) keys.insert(r.Key());
   CHECK(keys.size() == grid.size());
