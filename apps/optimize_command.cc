@@ -134,9 +134,11 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
                   "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "
                   "(Vertigo uses 1); 0 = use the gate")
       ->capture_default_str();
-  cmd->add_option("--dcs-phi", o->optimizer.dcs_phi, "DCS Phi")->capture_default_str();
+  cmd->add_option("--dcs-phi", o->optimizer.dcs_phi,
+                  "DCS Phi; 0 = gate / 3, so DCS rejects exactly above the chi2 gate")
+      ->capture_default_str();
   cmd->add_option("--loss-scale", o->optimizer.loss_scale_sigma,
-                  "Huber/Cauchy scale in sigmas")
+                  "Huber/Cauchy scale in sigmas; 0 = from the chi2 gate")
       ->capture_default_str();
   cmd->add_option("--gnc-mu-step", o->optimizer.gnc_mu_step, "GNC: growth of mu per round")
       ->capture_default_str();

@@ -81,11 +81,20 @@ double GraphChordalCost(const PoseGraph<PoseT>& graph) {
   return f;
 }
 
-RobustLoss LossFor(const PoseGraphOptimizerOptions& o) {
+// The loss of a method. Unset parameters (0) are set from the chi2 gate g so
+// that a closure's weight drops below 0.5 exactly when its chi2 exceeds g, as
+// for a switch: DCS's scale 2 Phi / (Phi + chi2) < 1/2 iff chi2 > 3 Phi;
+// Cauchy's sqrt(1 / (1 + chi2 / b^2)) < 1/2 iff chi2 > 3 b^2; Huber's
+// (b^2 / chi2)^(1/4) < 1/2 iff chi2 > 16 b^2.
+RobustLoss LossFor(const PoseGraphOptimizerOptions& o, int dof) {
+  const double gate = ChiSquareQuantile(dof, o.switch_gate_probability);
+  auto or_gate = [](double given, double from_gate) { return given > 0.0 ? given : from_gate; };
   switch (o.method) {
-    case RobustMethod::kDcs: return {RobustLoss::Type::kDcs, o.dcs_phi};
-    case RobustMethod::kCauchy: return {RobustLoss::Type::kCauchy, o.loss_scale_sigma};
-    case RobustMethod::kHuber: return {RobustLoss::Type::kHuber, o.loss_scale_sigma};
+    case RobustMethod::kDcs: return {RobustLoss::Type::kDcs, or_gate(o.dcs_phi, gate / 3.0)};
+    case RobustMethod::kCauchy:
+      return {RobustLoss::Type::kCauchy, or_gate(o.loss_scale_sigma, std::sqrt(gate / 3.0))};
+    case RobustMethod::kHuber:
+      return {RobustLoss::Type::kHuber, or_gate(o.loss_scale_sigma, std::sqrt(gate / 16.0))};
     default: return {};
   }
 }
@@ -188,7 +197,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   }
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
   const bool switchable = options.method == RobustMethod::kSwitchable;
-  const RobustLoss loss = LossFor(options);
+  const RobustLoss loss = LossFor(options, PoseT::kTangentDim);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
   };
@@ -378,8 +387,10 @@ void Validate(const PoseGraphOptimizerOptions& o) {
   if (!(o.switch_gate_probability > 0.0 && o.switch_gate_probability < 1.0)) {
     throw std::invalid_argument("switch_gate_probability must be in (0, 1)");
   }
-  if (!(o.dcs_phi > 0.0)) throw std::invalid_argument("dcs_phi must be > 0");
-  if (!(o.loss_scale_sigma > 0.0)) throw std::invalid_argument("loss_scale_sigma must be > 0");
+  if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
+  if (!(o.loss_scale_sigma >= 0.0)) {
+    throw std::invalid_argument("loss_scale_sigma must be >= 0 (0: from the gate)");
+  }
   if (o.cost == RelativePoseCostType::kChordal && o.method == RobustMethod::kSwitchable) {
     throw std::invalid_argument(
         "the chordal cost is not available with switchable constraints; use --method none, "
