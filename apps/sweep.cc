@@ -72,7 +72,9 @@ OutlierOptions OutlierOptionsFor(const SweepConfig& c, OutlierPolicy policy, int
   OutlierOptions o;
   o.policy = policy;
   o.count = count;
-  o.group_size = c.group_size;
+  // Random and local place single edges; the group size is for the others.
+  const bool single = policy == OutlierPolicy::kRandom || policy == OutlierPolicy::kLocal;
+  o.group_size = single ? 0 : c.group_size;
   o.local_window = c.local_window;
   o.seed = seed;
   return o;
