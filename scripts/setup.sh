@@ -62,14 +62,20 @@ case "$mode" in
   build) ;;
   demo)
     # The main job until the mapping pipeline lands: simulate a pose graph with
-    # ground truth, summarise it and optimise it.
+    # ground truth, spoil it with false loop closures, optimise it robustly,
+    # score it against the truth and draw it.
     out="$root/out/demo"
     mkdir -p "$out"
-    "$build_dir/apps/catgraph" generate-graph -o "$out/graph.g2o" --truth "$out/truth.g2o" \
-      --poses 1000 --seed 1
-    "$build_dir/apps/catgraph" info "$out/graph.g2o"
-    "$build_dir/apps/catgraph" optimize "$out/graph.g2o" -o "$out/corrected.g2o" \
-      --report "$out/report.json"
+    catgraph="$build_dir/apps/catgraph"
+    "$catgraph" generate-graph -o "$out/graph.g2o" --truth "$out/truth.g2o" --poses 1000 --seed 1
+    "$catgraph" info "$out/graph.g2o"
+    "$catgraph" inject "$out/graph.g2o" -o "$out/spoiled.g2o" --outliers 100 \
+      --policy local-grouped --seed 1 --labels "$out/labels.csv"
+    "$catgraph" optimize "$out/spoiled.g2o" -o "$out/corrected.g2o" --report "$out/report.json"
+    "$catgraph" evaluate "$out/corrected.g2o" --truth "$out/truth.g2o" --labels "$out/labels.csv"
+    "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.svg" --title "corrected map"
+    "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.png" --title "corrected map"
+    echo "setup: the demo's files are in $out (corrected.svg shows the map and its closures)"
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
