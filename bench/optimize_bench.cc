@@ -32,6 +32,7 @@ void BM_OptimizeManhattan(benchmark::State& state, RobustMethod method) {
   state.counters["iterations"] = result.summary.iterations;
   state.counters["rejected"] = static_cast<double>(result.rejected);
   state.counters["usable"] = result.summary.IsUsable();
+  state.counters["refine_s"] = result.refinement ? result.refinement->time_s : 0.0;
 }
 
 #define CATGRAPH_OPTIMIZE_BENCH(name, method)                              \
@@ -43,6 +44,7 @@ CATGRAPH_OPTIMIZE_BENCH(switchable, RobustMethod::kSwitchable);
 CATGRAPH_OPTIMIZE_BENCH(dcs, RobustMethod::kDcs);
 CATGRAPH_OPTIMIZE_BENCH(cauchy, RobustMethod::kCauchy);
 CATGRAPH_OPTIMIZE_BENCH(huber, RobustMethod::kHuber);
+CATGRAPH_OPTIMIZE_BENCH(gnc, RobustMethod::kGnc);
 
 }  // namespace
 }  // namespace catgraph
