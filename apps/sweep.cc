@@ -96,12 +96,20 @@ SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& ba
   c.datasets = ListOf<SweepDataset>(j, "datasets", [&](const nlohmann::json& d) {
     SweepDataset ds{d.at("name").get<std::string>(), path_of(d.at("graph").get<std::string>()), {}};
     if (d.contains("truth")) ds.truth = path_of(d.at("truth").get<std::string>());
-    if (ds.name.empty() || ds.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") != std::string::npos) {
+    constexpr std::string_view kNameCharacters =
+        "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-";
+    if (ds.name.empty() || ds.name.find_first_not_of(kNameCharacters) != std::string::npos) {
       throw std::invalid_argument("dataset name '" + ds.name +
                                   "' must be letters, digits, '_', '.' or '-'");
     }
     return ds;
   });
+  std::set<std::string> names;
+  for (const SweepDataset& d : c.datasets) {
+    if (!names.insert(d.name).second) {
+      throw std::invalid_argument("dataset name '" + d.name + "' is used twice");
+    }
+  }
   if (j.contains("methods")) {
     c.methods = ListOf<RobustMethod>(j, "methods", [](const nlohmann::json& m) {
       const auto v = RobustMethodFromString(m.get<std::string>());

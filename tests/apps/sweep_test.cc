@@ -85,6 +85,8 @@ TEST_CASE("YAML and JSON configurations read alike; unknown keys are errors",
   CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "bad.yaml"), Catch::Contains("unknown key 'method'"));
   std::ofstream(dir / "bad2.yaml") << "datasets:\n  - name: m\n    graph: g\nmethods: [magic]\n";
   CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "bad2.yaml"), Catch::Contains("unknown method 'magic'"));
+  std::ofstream(dir / "twice.yaml") << "datasets:\n  - {name: m, graph: a.g2o}\n  - {name: m, graph: b.g2o}\n";
+  CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "twice.yaml"), Catch::Contains("'m' is used twice"));
   std::ofstream(dir / "bad3.yaml") << "datasets: [\n";
   CHECK_THROWS_AS(ReadSweepConfigFile(dir / "bad3.yaml"), FileError);
   std::filesystem::remove_all(dir);
