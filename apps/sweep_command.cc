@@ -34,6 +34,7 @@ std::string Duration(double s) {
 // A bar redrawn in place on a terminal; on a pipe, one line per 10%.
 void ShowProgress(const SweepProgress& p) {
   static std::size_t last_decile = 0;
+  if (p.done <= 1) last_decile = 0;  // a new sweep in the same process
   const double fraction = static_cast<double>(p.done) / static_cast<double>(p.total);
   const double eta = p.done > 0 ? p.elapsed_s / static_cast<double>(p.done) *
                                       static_cast<double>(p.total - p.done)
