@@ -41,7 +41,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["chi2"] = r.chi2;
   j["cost"] = o.cost;
   j["chordal_cost"] = r.chordal_cost;
-  j["time_s"] = r.summary.time_s + (r.refinement ? r.refinement->time_s : 0.0);
+  j["time_s"] = r.TotalTimeS();
   j["refined"] = r.refinement.has_value();
   j["refine_iterations"] = r.refinement ? r.refinement->iterations : 0;
   j["refine_time_s"] = r.refinement ? r.refinement->time_s : 0.0;

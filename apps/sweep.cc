@@ -300,7 +300,7 @@ RunResult Run(const SweepRun& run, const SweepConfig& config, const LoadedDatase
       std::to_string(GroupSize(outliers)), usable ? "ok" : "failed",
       std::to_string(result.summary.iterations),
       std::to_string(result.refinement ? result.refinement->iterations : 0),
-      FormatDouble(result.summary.time_s + (result.refinement ? result.refinement->time_s : 0.0)),
+      FormatDouble(result.TotalTimeS()),
       FormatDouble(result.chi2), std::to_string(result.accepted), std::to_string(result.rejected),
       ate, anchored, FormatDouble(scores.precision), FormatDouble(scores.recall),
       FormatDouble(scores.f1), std::to_string(scores.true_positives),

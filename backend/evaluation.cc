@@ -125,8 +125,7 @@ std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
         std::vector<ClosureOutcome> outcomes;
         for (const auto& c : g.constraints) {
           if (c.IsBetweenConsecutivePoses()) continue;
-          const bool on = !c.switch_id || g.switches.at(*c.switch_id).value > 0.5;
-          outcomes.push_back({c.from, c.to, on});
+          outcomes.push_back({c.from, c.to, g.IsSwitchedOn(c)});
         }
         return outcomes;
       },

@@ -86,8 +86,7 @@ double GraphChordalCost(const PoseGraph<PoseT>& graph) {
 // for a switch: DCS's scale 2 Phi / (Phi + chi2) < 1/2 iff chi2 > 3 Phi;
 // Cauchy's sqrt(1 / (1 + chi2 / b^2)) < 1/2 iff chi2 > 3 b^2; Huber's
 // (b^2 / chi2)^(1/4) < 1/2 iff chi2 > 16 b^2.
-RobustLoss LossFor(const PoseGraphOptimizerOptions& o, int dof) {
-  const double gate = ChiSquareQuantile(dof, o.switch_gate_probability);
+RobustLoss LossFor(const PoseGraphOptimizerOptions& o, double gate) {
   auto or_gate = [](double given, double from_gate) { return given > 0.0 ? given : from_gate; };
   switch (o.method) {
     case RobustMethod::kDcs: return {RobustLoss::Type::kDcs, or_gate(o.dcs_phi, gate / 3.0)};
@@ -136,9 +135,8 @@ constexpr NameTable<InitialGuess, 3> kInitialGuessNames = {{
 // 1e-6) or unchanged, or `gnc_max_rounds` solves, each after the first
 // limited to `gnc_round_iterations`. Returns the summary of all rounds.
 template <typename PoseT, typename Solve>
-Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& options,
+Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& options, double cbar2,
                  std::map<ClosureId, double>& weights, Solve& solve) {
-  const double cbar2 = ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
   std::map<ClosureId, const Constraint<PoseT>*> closures;
   for (const auto& c : graph.constraints) {
     if (weights.contains(c.id)) closures[c.id] = &c;
@@ -197,16 +195,16 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   }
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
   const bool switchable = options.method == RobustMethod::kSwitchable;
-  const RobustLoss loss = LossFor(options, PoseT::kTangentDim);
+  // The chi2 gate every method decides at (docs/backend.md).
+  const double gate = ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
+  const RobustLoss loss = LossFor(options, gate);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
   };
 
   if (switchable) {
     const double switch_information =
-        options.switch_prior_information > 0.0
-            ? options.switch_prior_information
-            : ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
+        options.switch_prior_information > 0.0 ? options.switch_prior_information : gate;
     graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
   }
 
@@ -270,7 +268,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     for (const auto& c : graph.constraints) {
       if (!c.switch_id && robust(c)) gnc_weights[c.id] = 1.0;
     }
-    summary = SolveGnc(graph, options, gnc_weights, solve);
+    summary = SolveGnc(graph, options, gate, gnc_weights, solve);
   } else {
     summary = solve(nullptr, options.solver.max_iterations);
   }
@@ -348,7 +346,7 @@ PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>
     if (!d.accepted) rejected.insert(d.id);
   }
   std::erase_if(graph.constraints, [&](const Constraint<PoseT>& c) {
-    return rejected.contains(c.id) || (c.switch_id && graph.switches.at(*c.switch_id).value <= 0.5);
+    return rejected.contains(c.id) || !graph.IsSwitchedOn(c);
   });
   for (auto& c : graph.constraints) c.switch_id.reset();
   graph.switches.clear();

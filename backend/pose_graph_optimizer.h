@@ -103,6 +103,8 @@ struct PoseGraphOptimization {
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.
   std::optional<Summary> refinement;
+  // Seconds of the robust solve and the refinement together.
+  double TotalTimeS() const { return summary.time_s + (refinement ? refinement->time_s : 0.0); }
   std::vector<ClosureDecision> closures;  // every loop closure, in graph order
   std::size_t accepted = 0;
   std::size_t rejected = 0;

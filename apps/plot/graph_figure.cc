@@ -23,7 +23,7 @@ Axes Build(const PoseGraph<PoseT>& graph, const std::string& title) {
   rejected.dashed = true;
   for (const auto& c : graph.constraints) {
     Series& s = c.IsBetweenConsecutivePoses() ? odometry
-                : (!c.switch_id || graph.switches.at(*c.switch_id).value > 0.5) ? accepted
+                : graph.IsSwitchedOn(c) ? accepted
                                                                                 : rejected;
     const Pose2& a = poses.at(c.from);
     const Pose2& b = poses.at(c.to);

@@ -86,6 +86,11 @@ struct PoseGraph {
     for (const auto& c : constraints) next = std::max(next, c.id.value() + 1);
     return ClosureId(next);
   }
+  // False when `c` has a switch at 0.5 or below: a closure the robust back end
+  // turned off (Suenderhauf & Protzel's decision rule).
+  bool IsSwitchedOn(const Constraint<PoseT>& c) const {
+    return !c.switch_id || switches.at(*c.switch_id).value > 0.5;
+  }
   // Gives every constraint that has no switch and satisfies `selected` a new
   // switch (initial value 1) with `prior`. Switch ids continue after every
   // vertex and switch id in use, as g2o's shared id space requires.

@@ -20,11 +20,6 @@ nlohmann::json PoseJson(const Pose3& p) {
 }
 
 template <typename PoseT>
-bool IsAccepted(const PoseGraph<PoseT>& graph, const Constraint<PoseT>& c) {
-  return !c.switch_id || graph.switches.at(*c.switch_id).value > 0.5;
-}
-
-template <typename PoseT>
 nlohmann::json GraphJson(const PoseGraph<PoseT>& graph) {
   nlohmann::json j = {{"format", "catgraph-graph"},
                       {"version", 1},
@@ -52,7 +47,7 @@ nlohmann::json GraphJson(const PoseGraph<PoseT>& graph) {
                         {"parents", parents},
                         {"measurement", PoseJson(c.measurement.mean)},
                         {"information", information},
-                        {"accepted", IsAccepted(graph, c)}};
+                        {"accepted", graph.IsSwitchedOn(c)}};
     if (c.switch_id) e["switch"] = c.switch_id->value();
     if (c.maxmix_weight) e["maxmix_weight"] = *c.maxmix_weight;
     j["constraints"].push_back(e);
@@ -85,7 +80,7 @@ void Dot(const PoseGraph<PoseT>& graph, std::ostream& out) {
     out << "  " << c.from.value() << " -- " << c.to.value() << " [";
     if (c.kind == ClosureKind::kOdometry) {
       out << "color=gray50";
-    } else if (IsAccepted(graph, c)) {
+    } else if (graph.IsSwitchedOn(c)) {
       out << "color=forestgreen, tooltip=\"" << ToString(c.kind) << ' ' << c.id.value() << '"';
     } else {
       out << "color=red, style=dashed, tooltip=\"rejected " << ToString(c.kind) << ' '
