@@ -19,6 +19,7 @@ void AddInjectCommand(CLI::App& app, std::ostream& out);
 void AddEvaluateCommand(CLI::App& app, std::ostream& out);
 void AddExportCommand(CLI::App& app, std::ostream& out);
 void AddSweepCommand(CLI::App& app, std::ostream& out);
+void AddSimulateCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

@@ -22,6 +22,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddEvaluateCommand(app, out);
   AddSweepCommand(app, out);
   AddExportCommand(app, out);
+  AddSimulateCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/progress_bar.h"
 #include "apps/sweep.h"
 
 namespace catgraph {
@@ -21,36 +22,6 @@ std::atomic<bool> g_stop{false};
 extern "C" void OnInterrupt(int) {
   g_stop.store(true);
   std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends at once
-}
-
-std::string Duration(double s) {
-  char buffer[32];
-  const long t = std::lround(s);
-  if (t >= 3600) std::snprintf(buffer, sizeof buffer, "%ldh%02ldm", t / 3600, (t / 60) % 60);
-  else std::snprintf(buffer, sizeof buffer, "%ldm%02lds", t / 60, t % 60);
-  return buffer;
-}
-
-// A bar redrawn in place on a terminal; on a pipe, one line per 10%.
-void ShowProgress(const SweepProgress& p) {
-  static std::size_t last_decile = 0;
-  if (p.done <= 1) last_decile = 0;  // a new sweep in the same process
-  const double fraction = static_cast<double>(p.done) / static_cast<double>(p.total);
-  const double eta = p.done > 0 ? p.elapsed_s / static_cast<double>(p.done) *
-                                      static_cast<double>(p.total - p.done)
-                                : 0.0;
-  const bool tty = ::isatty(STDERR_FILENO) != 0;
-  const std::size_t decile = static_cast<std::size_t>(fraction * 10.0);
-  if (!tty && decile == last_decile && p.done != p.total) return;
-  last_decile = decile;
-  constexpr int kWidth = 30;
-  const int filled = static_cast<int>(fraction * kWidth);
-  std::fprintf(stderr, "%s[%s%s] %zu/%zu runs, %s elapsed, ETA %s%s", tty ? "\r" : "",
-               std::string(static_cast<std::size_t>(filled), '#').c_str(),
-               std::string(static_cast<std::size_t>(kWidth - filled), ' ').c_str(), p.done,
-               p.total, Duration(p.elapsed_s).c_str(), Duration(eta).c_str(),
-               tty && p.done != p.total ? "" : "\n");
-  std::fflush(stderr);
 }
 
 struct SweepCommandOptions {
@@ -75,7 +46,10 @@ void RunSweepCommand(const SweepCommandOptions& o, std::ostream& out) {
   SweepOptions options;
   options.shard = ParseShard(o.shard);
   options.jobs = o.jobs;
-  if (!o.quiet) options.on_progress = ShowProgress;
+  auto bar = std::make_shared<ProgressBar>("runs");
+  if (!o.quiet) {
+    options.on_progress = [bar](const SweepProgress& p) { bar->Update(p.done, p.total, p.elapsed_s); };
+  }
   g_stop.store(false);
   options.stop = &g_stop;
   const auto previous = std::signal(SIGINT, OnInterrupt);

@@ -1,0 +1,402 @@
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "backend/io/atomic_file.h"
+#include "backend/io/dataset.h"
+#include "backend/io/file_error.h"
+#include "backend/io/internal/text_line.h"
+
+namespace catgraph {
+namespace {
+
+constexpr std::size_t kMaxCsvLineBytes = 4096;
+constexpr std::uintmax_t kMaxMetaBytes = 256u << 20;  // meta.json holds per-frame flags
+
+std::vector<std::string_view> SplitCsv(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos
+                                                                                 : comma - start);
+    const std::size_t b = field.find_first_not_of(kWhitespace);
+    const std::size_t e = field.find_last_not_of(kWhitespace);
+    fields.push_back(b == std::string_view::npos ? std::string_view() : field.substr(b, e - b + 1));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
+// Calls `row` for every data line of a CSV file whose header starts with
+// `columns`; extra columns named in `optional` may follow.
+template <typename RowFn>
+void ReadCsv(const std::filesystem::path& path, const std::vector<std::string>& columns,
+             const std::vector<std::string>& optional, RowFn row) {
+  std::string expected_header;
+  for (const auto& c : columns) expected_header += (expected_header.empty() ? "" : ",") + c;
+  for (const auto& c : optional) expected_header += "[," + c + "]";
+  std::ifstream in = OpenForReading(path, "a CSV table with header '" + expected_header + "'");
+  const std::string name = path.string();
+  std::string text;
+  int number = 0;
+  bool header = true;
+  std::size_t width = columns.size();
+  while (ReadBoundedLine(in, text, kMaxCsvLineBytes, name, number, "a CSV row")) {
+    ++number;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (text.find_first_not_of(kWhitespace) == std::string::npos) continue;
+    const std::vector<std::string_view> fields = SplitCsv(text);
+    if (header) {
+      header = false;
+      bool ok = fields.size() >= columns.size() && fields.size() <= columns.size() + optional.size();
+      for (std::size_t i = 0; ok && i < fields.size(); ++i) {
+        const std::string& want = i < columns.size() ? columns[i] : optional[i - columns.size()];
+        ok = fields[i] == want;
+      }
+      if (!ok) {
+        throw FileError(name, number,
+                        "expected the header '" + expected_header + "', found '" + text + "'");
+      }
+      width = fields.size();
+      continue;
+    }
+    if (fields.size() != width) {
+      throw FileError(name, number,
+                      "expected " + std::to_string(width) + " comma-separated fields, found " +
+                          std::to_string(fields.size()));
+    }
+    row(Line(name, number, fields, "row"));
+  }
+  if (header) throw FileError(name, 0, "is empty; expected a header line and rows");
+}
+
+std::vector<TimedPose2> ReadPoses(const std::filesystem::path& path) {
+  std::vector<TimedPose2> poses;
+  ReadCsv(path, {"timestamp", "x", "y", "theta"}, {}, [&](const Line& line) {
+    TimedPose2 p;
+    p.timestamp_s = line.Number(0, "timestamp");
+    p.pose = Pose2(line.Number(1, "x"), line.Number(2, "y"), line.Number(3, "theta"));
+    if (!poses.empty() && !(p.timestamp_s > poses.back().timestamp_s)) {
+      line.Fail("timestamp " + std::string(line.token(0)) +
+                " is not after the previous row's; expected strictly increasing timestamps");
+    }
+    poses.push_back(p);
+  });
+  if (poses.size() < 2) {
+    throw FileError(path.string(), 0,
+                    "holds " + std::to_string(poses.size()) + " rows; expected at least 2 poses");
+  }
+  return poses;
+}
+
+std::vector<DatasetFrame> ReadFrames(const std::filesystem::path& root) {
+  const std::filesystem::path path = root / "frames.csv";
+  std::vector<DatasetFrame> frames;
+  ReadCsv(path, {"timestamp", "image", "traversal", "changed"}, {"changed_fraction"},
+          [&](const Line& line) {
+            DatasetFrame f;
+            f.timestamp_s = line.Number(0, "timestamp");
+            if (!frames.empty() && !(f.timestamp_s > frames.back().timestamp_s)) {
+              line.Fail("timestamp " + std::string(line.token(0)) +
+                        " is not after the previous frame's; expected strictly increasing "
+                        "timestamps");
+            }
+            f.image = std::string(line.token(1));
+            const std::filesystem::path image(f.image);
+            if (f.image.empty() || image.is_absolute() ||
+                std::find(image.begin(), image.end(), "..") != image.end()) {
+              line.Fail("image '" + f.image +
+                        "': expected a path relative to the dataset folder, inside it");
+            }
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(root / image, ec)) {
+              line.Fail("image '" + f.image + "' does not exist (expected " +
+                        (root / image).string() + ")");
+            }
+            const double traversal = line.Number(2, "traversal");
+            if (traversal < 1 || traversal > 1e6 || traversal != std::floor(traversal)) {
+              line.Fail("traversal '" + std::string(line.token(2)) +
+                        "': expected a positive integer");
+            }
+            f.traversal = static_cast<int>(traversal);
+            const std::string_view changed = line.token(3);
+            if (changed != "0" && changed != "1") {
+              line.Fail("changed '" + std::string(changed) + "': expected 0 or 1");
+            }
+            f.changed = changed == "1";
+            if (line.size() > 4) {
+              f.changed_fraction = line.Number(4, "changed_fraction");
+              if (f.changed_fraction < 0.0 || f.changed_fraction > 1.0) {
+                line.Fail("changed_fraction " + std::string(line.token(4)) +
+                          ": expected a number in [0, 1]");
+              }
+            }
+            frames.push_back(std::move(f));
+          });
+  if (frames.empty()) throw FileError(path.string(), 0, "holds no frames; expected at least one");
+  return frames;
+}
+
+Polygon2 PolygonFromJson(const nlohmann::json& j) {
+  Polygon2 polygon;
+  for (const auto& p : j) polygon.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
+  if (polygon.size() < 3) throw std::invalid_argument("a polygon needs at least 3 points");
+  return polygon;
+}
+
+nlohmann::json PolygonToJson(const Polygon2& polygon) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& p : polygon) j.push_back({p.x(), p.y()});
+  return j;
+}
+
+DatasetMeta ReadMeta(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  std::ifstream in = OpenForReading(path, "meta.json (the dataset's description)");
+  if (!ec && size > kMaxMetaBytes) {
+    throw FileError(name, 0, "is " + std::to_string(size) + " bytes; expected at most " +
+                                 std::to_string(kMaxMetaBytes));
+  }
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    // nlohmann reports a byte offset; turn it into a line.
+    std::ifstream again(path, std::ios::binary);
+    int line = 1;
+    char c;
+    for (std::size_t i = 0; i + 1 < e.byte && again.get(c); ++i) line += c == '\n';
+    throw FileError(name, line, std::string("expected valid JSON: ") + e.what());
+  }
+  DatasetMeta meta;
+  try {
+    if (!j.is_object()) throw std::invalid_argument("expected a JSON object at the top level");
+    meta.format_version = j.at("format_version").get<int>();
+    if (meta.format_version < 1 || meta.format_version > kDatasetFormatVersion) {
+      throw std::invalid_argument("format_version " + std::to_string(meta.format_version) +
+                                  " is not supported; expected 1.." +
+                                  std::to_string(kDatasetFormatVersion));
+    }
+    meta.scenario = j.value("scenario", "");
+    meta.seed = j.value("seed", std::uint64_t{0});
+    meta.synthetic_images = j.value("synthetic_images", false);
+    meta.synthetic_odometry = j.value("synthetic_odometry", false);
+    meta.synthetic_ground_truth = j.value("synthetic_ground_truth", false);
+    meta.note = j.value("note", "");
+    meta.odometry_rate_hz = j.value("odometry_rate_hz", 0.0);
+    if (j.contains("camera")) {
+      const auto& c = j.at("camera");
+      meta.camera.model = c.value("model", "unknown");
+      meta.camera.width_px = c.value("width_px", 0);
+      meta.camera.height_px = c.value("height_px", 0);
+      meta.camera.hfov_deg = c.value("hfov_deg", 0.0);
+      meta.camera.vfov_deg = c.value("vfov_deg", 0.0);
+      meta.camera.height_m = c.value("height_m", 0.0);
+      meta.camera.frame_rate_hz = c.value("frame_rate_hz", 0.0);
+    }
+    for (const auto& r : j.value("changed_regions", nlohmann::json::array())) {
+      meta.changed_regions.push_back(
+          {r.at("name").get<std::string>(), r.value("kind", ""), PolygonFromJson(r.at("polygon"))});
+    }
+    for (const auto& f : j.at("frame_changed")) meta.frame_changed.push_back(f.get<int>() != 0);
+    if (j.contains("floor_plan")) {
+      const auto& plan = j.at("floor_plan");
+      for (const auto& w : plan.value("walls", nlohmann::json::array())) {
+        meta.walls.emplace_back(w.at(0).get<double>(), w.at(1).get<double>(),
+                                w.at(2).get<double>(), w.at(3).get<double>());
+      }
+      for (const auto& f : plan.value("furniture", nlohmann::json::array())) {
+        meta.furniture.push_back({f.at("name").get<std::string>(), PolygonFromJson(f.at("polygon")),
+                                  f.value("height_m", 0.0),
+                                  f.at("traversals").get<std::vector<int>>()});
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw FileError(name, 0, std::string("expected the meta.json keys of docs/dataset-format.md: ") +
+                                 e.what());
+  } catch (const std::invalid_argument& e) {
+    throw FileError(name, 0, e.what());
+  }
+  return meta;
+}
+
+// The consistency checks shared by the reader and the writer; `fail(file,
+// line, message)` reports the first problem.
+template <typename FailFn>
+void CheckConsistency(const Dataset& d, FailFn fail) {
+  if (d.meta.frame_changed.size() != d.frames.size()) {
+    fail("meta.json", 0,
+         "frame_changed has " + std::to_string(d.meta.frame_changed.size()) +
+             " entries; expected one per frame of frames.csv (" + std::to_string(d.frames.size()) +
+             ")");
+  }
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    if (d.meta.frame_changed[i] != d.frames[i].changed) {
+      fail("meta.json", 0,
+           "frame_changed[" + std::to_string(i) + "] disagrees with frames.csv row " +
+               std::to_string(i + 2) + " (changed " + (d.frames[i].changed ? "1" : "0") + ")");
+    }
+  }
+  const double t0 = d.odometry.front().timestamp_s, t1 = d.odometry.back().timestamp_s;
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    const double t = d.frames[i].timestamp_s;
+    if (t < t0 || t > t1) {
+      char range[96];
+      std::snprintf(range, sizeof range, "[%.6f, %.6f]", t0, t1);
+      fail("frames.csv", static_cast<int>(i) + 2,
+           "frame timestamp " + std::to_string(t) + " lies outside the odometry's time range " +
+               range + "; expected every frame to have odometry");
+    }
+  }
+}
+
+void WriteCsv(const std::filesystem::path& path, const std::string& header,
+              const std::function<void(std::ostream&)>& rows) {
+  WriteFileAtomically(path, [&](std::ostream& out) {
+    out << header << '\n';
+    rows(out);
+  });
+}
+
+void WritePoses(const std::filesystem::path& path, const std::vector<TimedPose2>& poses) {
+  WriteCsv(path, "timestamp,x,y,theta", [&](std::ostream& out) {
+    char line[160];
+    for (const auto& p : poses) {
+      std::snprintf(line, sizeof line, "%.6f,%.6f,%.6f,%.9f\n", p.timestamp_s, p.pose.x(),
+                    p.pose.y(), p.pose.theta());
+      out << line;
+    }
+  });
+}
+
+}  // namespace
+
+std::vector<int> Dataset::Traversals() const {
+  std::vector<int> ids;
+  for (const auto& f : frames) {
+    if (std::find(ids.begin(), ids.end(), f.traversal) == ids.end()) ids.push_back(f.traversal);
+  }
+  return ids;
+}
+
+Dataset ReadDataset(const std::filesystem::path& root) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(root, ec)) {
+    throw FileError(root.string(), 0,
+                    std::filesystem::exists(root, ec)
+                        ? "is not a directory; expected a dataset folder (docs/dataset-format.md)"
+                        : "no such directory; expected a dataset folder (docs/dataset-format.md)");
+  }
+  Dataset d;
+  d.root = root;
+  d.meta = ReadMeta(root / "meta.json");
+  d.frames = ReadFrames(root);
+  d.odometry = ReadPoses(root / "odometry.csv");
+  if (std::filesystem::exists(root / "groundtruth.csv", ec)) {
+    d.ground_truth = ReadPoses(root / "groundtruth.csv");
+  }
+  CheckConsistency(d, [&](const std::string& file, int line, const std::string& message) {
+    throw FileError((root / file).string(), line, message);
+  });
+  return d;
+}
+
+void WriteDatasetTables(const Dataset& d) {
+  if (d.odometry.size() < 2) throw std::invalid_argument("a dataset needs at least 2 odometry poses");
+  CheckConsistency(d, [](const std::string& file, int line, const std::string& message) {
+    throw std::invalid_argument(file + (line > 0 ? ":" + std::to_string(line) : "") + ": " +
+                                message);
+  });
+  std::filesystem::create_directories(d.root);
+  WriteCsv(d.root / "frames.csv", "timestamp,image,traversal,changed,changed_fraction",
+           [&](std::ostream& out) {
+             char line[64];
+             for (const auto& f : d.frames) {
+               std::snprintf(line, sizeof line, "%.6f,", f.timestamp_s);
+               out << line << f.image << ',' << f.traversal << ',' << (f.changed ? 1 : 0);
+               std::snprintf(line, sizeof line, ",%.4f\n", f.changed_fraction);
+               out << line;
+             }
+           });
+  WritePoses(d.root / "odometry.csv", d.odometry);
+  if (d.HasGroundTruth()) WritePoses(d.root / "groundtruth.csv", d.ground_truth);
+
+  const DatasetMeta& m = d.meta;
+  nlohmann::ordered_json j;
+  j["format_version"] = kDatasetFormatVersion;
+  j["scenario"] = m.scenario;
+  j["seed"] = m.seed;
+  j["synthetic_images"] = m.synthetic_images;
+  j["synthetic_odometry"] = m.synthetic_odometry;
+  j["synthetic_ground_truth"] = m.synthetic_ground_truth;
+  j["note"] = m.note;
+  j["camera"] = {{"model", m.camera.model},       {"width_px", m.camera.width_px},
+                 {"height_px", m.camera.height_px}, {"hfov_deg", m.camera.hfov_deg},
+                 {"vfov_deg", m.camera.vfov_deg},   {"height_m", m.camera.height_m},
+                 {"frame_rate_hz", m.camera.frame_rate_hz}};
+  j["odometry_rate_hz"] = m.odometry_rate_hz;
+  j["frames"] = d.frames.size();
+  j["traversals"] = d.Traversals();
+  nlohmann::ordered_json regions = nlohmann::ordered_json::array();
+  for (const auto& r : m.changed_regions) {
+    regions.push_back({{"name", r.name}, {"kind", r.kind}, {"polygon", PolygonToJson(r.polygon)}});
+  }
+  j["changed_regions"] = regions;
+  std::vector<int> flags;
+  for (bool f : m.frame_changed) flags.push_back(f ? 1 : 0);
+  j["frame_changed"] = flags;
+  if (!m.walls.empty() || !m.furniture.empty()) {
+    nlohmann::ordered_json walls = nlohmann::ordered_json::array();
+    for (const auto& w : m.walls) walls.push_back({w[0], w[1], w[2], w[3]});
+    nlohmann::ordered_json furniture = nlohmann::ordered_json::array();
+    for (const auto& f : m.furniture) {
+      furniture.push_back({{"name", f.name},
+                           {"height_m", f.height_m},
+                           {"traversals", f.traversals},
+                           {"polygon", PolygonToJson(f.polygon)}});
+    }
+    j["floor_plan"] = {{"walls", walls}, {"furniture", furniture}};
+  }
+  WriteFileAtomically(d.root / "meta.json", [&](std::ostream& out) { out << j.dump(1) << '\n'; });
+}
+
+Pose2 InterpolatePose(const std::vector<TimedPose2>& poses, double t) {
+  if (poses.empty() || t < poses.front().timestamp_s || t > poses.back().timestamp_s) {
+    throw std::out_of_range("time " + std::to_string(t) + " outside the poses' time range");
+  }
+  const auto after = std::lower_bound(
+      poses.begin(), poses.end(), t,
+      [](const TimedPose2& p, double time) { return p.timestamp_s < time; });
+  if (after == poses.begin()) return after->pose;
+  const auto before = after - 1;
+  const double span = after->timestamp_s - before->timestamp_s;
+  return Interpolate(before->pose, after->pose, (t - before->timestamp_s) / span);
+}
+
+bool PointInPolygon(const Polygon2& polygon, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Eigen::Vector2d& a = polygon[i];
+    const Eigen::Vector2d& b = polygon[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
+}  // namespace catgraph
