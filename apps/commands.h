@@ -20,6 +20,8 @@ void AddEvaluateCommand(CLI::App& app, std::ostream& out);
 void AddExportCommand(CLI::App& app, std::ostream& out);
 void AddSweepCommand(CLI::App& app, std::ostream& out);
 void AddSimulateCommand(CLI::App& app, std::ostream& out);
+void AddConvertCommand(CLI::App& app, std::ostream& out);
+void AddPlotDatasetCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

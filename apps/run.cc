@@ -23,6 +23,8 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddSweepCommand(app, out);
   AddExportCommand(app, out);
   AddSimulateCommand(app, out);
+  AddConvertCommand(app, out);
+  AddPlotDatasetCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

@@ -32,21 +32,6 @@ std::string ImageName(std::size_t index) {
   return name;
 }
 
-// Ground truth at every odometry tick and every frame.
-std::vector<TimedPose2> GroundTruth(const RobotRun& run, const std::vector<TimedPose2>& odometry,
-                                    const std::vector<PlannedFrame>& frames) {
-  std::vector<double> times;
-  for (const auto& o : odometry) times.push_back(o.timestamp_s);
-  for (const auto& f : frames) times.push_back(f.timestamp_s);
-  std::sort(times.begin(), times.end());
-  std::vector<TimedPose2> truth;
-  for (const double t : times) {
-    if (!truth.empty() && t - truth.back().timestamp_s < 1e-7) continue;
-    truth.push_back({t, InterpolatePose(run.truth, t)});
-  }
-  return truth;
-}
-
 void RemoveStaleImages(const std::filesystem::path& images, std::size_t count) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(images, ec)) {
@@ -182,7 +167,10 @@ SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesyste
     d.odometry.push_back(o);
     if (o.timestamp_s >= last) break;  // the odometry covers the frames, no more
   }
-  d.ground_truth = GroundTruth(run, d.odometry, planned);
+  std::vector<double> times;  // ground truth at every odometry tick and frame
+  for (const auto& o : d.odometry) times.push_back(o.timestamp_s);
+  for (const auto& f : d.frames) times.push_back(f.timestamp_s);
+  d.ground_truth = TruthAt(run, std::move(times));
   DatasetMeta& m = d.meta;
   m.scenario = scenario.name;
   m.seed = seed;

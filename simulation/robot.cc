@@ -116,6 +116,16 @@ std::vector<Eigen::Vector2d> OffsetRoute(const std::vector<Eigen::Vector2d>& rou
   return out;
 }
 
+std::vector<TimedPose2> TruthAt(const RobotRun& run, std::vector<double> times) {
+  std::sort(times.begin(), times.end());
+  std::vector<TimedPose2> truth;
+  for (const double t : times) {
+    if (!truth.empty() && t - truth.back().timestamp_s < 1e-7) continue;
+    truth.push_back({t, InterpolatePose(run.truth, t)});
+  }
+  return truth;
+}
+
 RobotRun DriveRoutes(const std::vector<TraversalPlan>& traversals, const RobotOptions& robot,
                      const OdometryOptions& odo, std::uint64_t seed) {
   Validate(traversals, robot, odo);

@@ -63,6 +63,11 @@ struct RobotRun {
 // dropped. Throws std::invalid_argument with fewer than 2 distinct points.
 std::vector<Eigen::Vector2d> OffsetRoute(const std::vector<Eigen::Vector2d>& route, double offset_m);
 
+// The true poses at `times` (sorted, duplicates within 0.1 us dropped),
+// interpolated between simulation steps. Throws std::out_of_range outside
+// the run.
+std::vector<TimedPose2> TruthAt(const RobotRun& run, std::vector<double> times);
+
 // Drives the traversals one after the other, starting at the first
 // waypoint facing the second. Throws std::invalid_argument on bad options
 // and std::runtime_error when the controller cannot reach a route's end.

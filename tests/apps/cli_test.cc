@@ -255,5 +255,34 @@ TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plot-dataset draws",
+          "[apps][simulate]") {
+  const Result list = Run({"simulate", "--list"});
+  REQUIRE(list.status == 0);
+  CHECK(list.out == "office-static\noffice-change\noffice-split\noffice-lighting\n");
+  const Result print = Run({"simulate", "--print-scenario", "office-change"});
+  REQUIRE(print.status == 0);
+  CHECK(print.out.find("name: office-change") != std::string::npos);
+
+  const auto dir = testing::TempDir("cli_simulate");
+  const Result sim = Run({"simulate", "--scenario", "office-change", "-o", (dir / "data").string(),
+                          "--frames", "20", "--seed", "3", "--quiet"});
+  REQUIRE(sim.status == 0);
+  CHECK(sim.out.find("scenario office-change, seed 3, 20 frames") != std::string::npos);
+  CHECK(std::filesystem::file_size(dir / "data" / "images" / "000019.png") > 10000);
+  const Result plot = Run({"plot-dataset", (dir / "data").string(), "-o", (dir / "plan.png").string(),
+                           "--pair-at", "4,1.2", "--pair-output", (dir / "pair.png").string()});
+  REQUIRE(plot.status == 0);
+  CHECK(std::filesystem::file_size(dir / "plan.png") > 20000);
+  CHECK(std::filesystem::file_size(dir / "pair.png") > 20000);
+  // A scenario file of the user's, with a mistake, is named with its line.
+  std::ofstream(dir / "mine.yaml") << print.out << "extra_key: 1\n";
+  const Result bad = Run({"simulate", "--scenario", (dir / "mine.yaml").string(), "-o", (dir / "x").string()});
+  CHECK(bad.status == 1);
+  CHECK(bad.err.find("mine.yaml:") != std::string::npos);
+  CHECK(bad.err.find("unknown key 'extra_key'") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace catgraph
