@@ -75,7 +75,13 @@ case "$mode" in
     "$catgraph" evaluate "$out/corrected.g2o" --truth "$out/truth.g2o" --labels "$out/labels.csv"
     "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.svg" --title "corrected map"
     "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.png" --title "corrected map"
-    echo "setup: the demo's files are in $out (corrected.svg shows the map and its closures)"
+    # The office world the mapping pipeline runs on: camera images, wheel
+    # odometry and ground truth, furniture moved before the second traversal.
+    "$catgraph" simulate --scenario office-change -o "$out/office-change" --quiet
+    "$catgraph" plot-dataset "$out/office-change" -o "$out/office-change-plan.png" \
+      --pair-at 16,1.3 --pair-output "$out/office-change-before-after.png"
+    echo "setup: the demo's files are in $out (corrected.svg shows the map and its closures;"
+    echo "       office-change/ is the simulated dataset, office-change-plan.png its floor plan)"
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
