@@ -120,9 +120,7 @@ void WritePair(const Dataset& d, const Eigen::Vector2d& place, const std::filesy
   cv::hconcat(panels, pair);
   std::vector<std::uint8_t> png;
   cv::imencode(".png", pair, png);
-  WriteFileAtomically(output, [&](std::ostream& file) {
-    file.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  });
+  WriteBytesAtomically(output, png);
   out << "wrote " << output.string() << '\n';
 }
 

@@ -115,9 +115,7 @@ SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesyste
         changed_fraction[i] = detail.changed_fraction;
         std::vector<std::uint8_t> png;
         cv::imencode(".png", image, png);
-        WriteFileAtomically(directory / ImageName(i), [&](std::ostream& out) {
-          out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-        });
+        WriteBytesAtomically(directory / ImageName(i), png);
         ++done;
         progressed.notify_one();
       }

@@ -89,9 +89,7 @@ VprBenchImportSummary ImportVprBench(const std::filesystem::path& source,
       std::snprintf(name, sizeof name, "images/%06zu.png", d.frames.size());
       std::vector<std::uint8_t> png;
       cv::imencode(".png", image, png);
-      WriteFileAtomically(output / name, [&](std::ostream& out) {
-        out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-      });
+      WriteBytesAtomically(output / name, png);
       d.frames.push_back({CrossingTime(run, drive_id, static_cast<double>(i) * options.spacing_m), name,
                           traversal, false, 0.0});
       d.meta.frame_changed.push_back(false);

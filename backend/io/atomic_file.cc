@@ -58,4 +58,10 @@ void WriteFileAtomically(const std::filesystem::path& path,
   }
 }
 
+void WriteBytesAtomically(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
+  WriteFileAtomically(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  });
+}
+
 }  // namespace catgraph

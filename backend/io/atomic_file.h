@@ -8,14 +8,19 @@
 #define CATGRAPH_BACKEND_IO_ATOMIC_FILE_H_
 
 #include <filesystem>
+#include <cstdint>
 #include <functional>
 #include <ostream>
+#include <vector>
 
 namespace catgraph {
 
 // Throws FileError when the file cannot be created, written or renamed.
 void WriteFileAtomically(const std::filesystem::path& path,
                          const std::function<void(std::ostream&)>& write);
+
+// The same for bytes already in memory (an encoded image).
+void WriteBytesAtomically(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes);
 
 }  // namespace catgraph
 
