@@ -25,6 +25,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddSimulateCommand(app, out);
   AddConvertCommand(app, out);
   AddPlotDatasetCommand(app, out);
+  AddVocabularyCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

@@ -1,0 +1,204 @@
+#include "frontend/vocabulary.h"
+
+#include <algorithm>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "backend/graph/name_table.h"
+#include "backend/io/atomic_file.h"
+#include "backend/io/file_error.h"
+
+namespace catgraph {
+namespace {
+
+constexpr int kFormatVersion = 1;
+constexpr std::uintmax_t kMaxFileBytes = 512u << 20;
+
+constexpr NameTable<FeatureType, 4> kFeatureNames{{
+    {FeatureType::kSift, "sift"},
+    {FeatureType::kOrb, "orb"},
+    {FeatureType::kAkaze, "akaze"},
+    {FeatureType::kKaze, "kaze"},
+}};
+
+cv::Ptr<cv::Feature2D> MakeDetector(FeatureType type) {
+  switch (type) {
+    case FeatureType::kSift: return cv::SIFT::create();
+    case FeatureType::kOrb: return cv::ORB::create();
+    case FeatureType::kAkaze: return cv::AKAZE::create();
+    case FeatureType::kKaze: return cv::KAZE::create();
+  }
+  return cv::SIFT::create();
+}
+
+// A sequence node element by element (OpenCV's operator>> into a vector
+// trips GCC 12's -Wnull-dereference inside libstdc++).
+template <typename T>
+std::vector<T> ReadSequence(const cv::FileNode& node) {
+  std::vector<T> values;
+  if (!node.isSeq()) return values;
+  for (auto it = node.begin(); it != node.end(); ++it) values.push_back(static_cast<T>(*it));
+  return values;
+}
+
+}  // namespace
+
+std::string_view ToString(FeatureType type) { return NameOf(kFeatureNames, type); }
+
+FeatureType FeatureTypeFromString(std::string_view text) {
+  if (const auto type = ValueOf(kFeatureNames, text)) return *type;
+  throw std::invalid_argument("unknown feature '" + std::string(text) +
+                              "'; expected one of sift, orb, akaze, kaze");
+}
+
+Vocabulary::Vocabulary(FeatureType feature, cv::Mat centres, ChowLiuTree tree)
+    : feature_(feature), centres_(std::move(centres)), tree_(std::move(tree)) {
+  if (centres_.type() != CV_32F || centres_.rows < 2) {
+    throw std::invalid_argument("vocabulary: expected at least 2 CV_32F word centres");
+  }
+  if (tree_.vocabulary_size() != centres_.rows || tree_.p_z.size() != tree_.parent.size() ||
+      tree_.p_z_given_parent_on.size() != tree_.parent.size() ||
+      tree_.p_z_given_parent_off.size() != tree_.parent.size()) {
+    throw std::invalid_argument("vocabulary: the Chow-Liu tree has " +
+                                std::to_string(tree_.vocabulary_size()) + " words, the centres " +
+                                std::to_string(centres_.rows));
+  }
+}
+
+cv::Mat ComputeDescriptors(FeatureType feature, const cv::Mat& image) {
+  cv::Mat grey = image;
+  if (image.channels() == 3) cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  if (image.channels() == 4) cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  MakeDetector(feature)->detectAndCompute(grey, cv::noArray(), keypoints, descriptors);
+  cv::Mat out;
+  if (!descriptors.empty()) descriptors.convertTo(out, CV_32F);
+  return out;
+}
+
+WordSet QuantizeDescriptors(const cv::Mat& centres, const cv::Mat& descriptors) {
+  WordSet words;
+  if (descriptors.empty()) return words;
+  if (descriptors.cols != centres.cols || descriptors.type() != CV_32F) {
+    throw std::invalid_argument("descriptors of " + std::to_string(descriptors.cols) +
+                                " values; the vocabulary's words have " + std::to_string(centres.cols));
+  }
+  std::vector<cv::DMatch> matches;
+  cv::BFMatcher(cv::NORM_L2).match(descriptors, centres, matches);
+  for (const auto& m : matches) words.push_back(m.trainIdx);
+  std::sort(words.begin(), words.end());
+  words.erase(std::unique(words.begin(), words.end()), words.end());
+  return words;
+}
+
+Vocabulary TrainVocabulary(const std::vector<cv::Mat>& images, const VocabularyOptions& options) {
+  if (options.words < 2 || options.kmeans_iterations < 1 || options.kmeans_attempts < 1 ||
+      options.max_descriptors < static_cast<std::size_t>(options.words)) {
+    throw std::invalid_argument("vocabulary options: expected words >= 2, iterations and attempts "
+                                ">= 1, max_descriptors >= words");
+  }
+  std::vector<cv::Mat> per_image;
+  int total = 0;
+  for (const cv::Mat& image : images) {
+    per_image.push_back(ComputeDescriptors(options.feature, image));
+    total += per_image.back().rows;
+  }
+  if (total < options.words) {
+    throw std::invalid_argument("vocabulary: the training images have " + std::to_string(total) +
+                                " descriptors, fewer than the " + std::to_string(options.words) +
+                                " words asked for");
+  }
+  cv::Mat all;
+  for (const cv::Mat& d : per_image) {
+    if (!d.empty()) all.push_back(d);
+  }
+  // A seeded random subset when there are too many to cluster.
+  if (static_cast<std::size_t>(all.rows) > options.max_descriptors) {
+    std::vector<int> order(static_cast<std::size_t>(all.rows));
+    std::iota(order.begin(), order.end(), 0);
+    std::mt19937_64 rng(options.seed);
+    std::shuffle(order.begin(), order.end(), rng);
+    cv::Mat subset;
+    for (std::size_t i = 0; i < options.max_descriptors; ++i) subset.push_back(all.row(order[i]));
+    all = subset;
+  }
+  cv::theRNG().state = options.seed;
+  cv::Mat labels, centres;
+  cv::kmeans(all, options.words, labels,
+             cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, options.kmeans_iterations, 1e-4),
+             options.kmeans_attempts, cv::KMEANS_PP_CENTERS, centres);
+  std::vector<WordSet> observations;
+  for (const cv::Mat& d : per_image) observations.push_back(QuantizeDescriptors(centres, d));
+  return {options.feature, centres, LearnChowLiuTree(observations, options.words)};
+}
+
+void Vocabulary::Save(const std::filesystem::path& path) const {
+  cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+  fs << "format_version" << kFormatVersion;
+  fs << "feature" << std::string(ToString(feature_));
+  fs << "words" << size();
+  fs << "centres" << centres_;
+  fs << "tree_parent" << tree_.parent;
+  fs << "tree_p_z" << tree_.p_z;
+  fs << "tree_p_z_given_parent_on" << tree_.p_z_given_parent_on;
+  fs << "tree_p_z_given_parent_off" << tree_.p_z_given_parent_off;
+  const std::string text = fs.releaseAndGetString();
+  WriteFileAtomically(path, [&](std::ostream& out) { out << text; });
+}
+
+Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (ec) throw FileError(name, 0, "cannot read the file; expected a vocabulary (catgraph vocabulary train)");
+  if (bytes > kMaxFileBytes) throw FileError(name, 0, "is larger than 512 MB; expected a vocabulary file");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  try {
+    cv::FileStorage fs(text.str(), cv::FileStorage::READ | cv::FileStorage::MEMORY);
+    int version = 0;
+    fs["format_version"] >> version;
+    if (version != kFormatVersion) {
+      throw FileError(name, 0, "format_version " + std::to_string(version) + "; expected " +
+                                   std::to_string(kFormatVersion) + " (a catgraph vocabulary)");
+    }
+    std::string feature;
+    fs["feature"] >> feature;
+    cv::Mat centres;
+    fs["centres"] >> centres;
+    ChowLiuTree tree;
+    tree.parent = ReadSequence<int>(fs["tree_parent"]);
+    tree.p_z = ReadSequence<double>(fs["tree_p_z"]);
+    tree.p_z_given_parent_on = ReadSequence<double>(fs["tree_p_z_given_parent_on"]);
+    tree.p_z_given_parent_off = ReadSequence<double>(fs["tree_p_z_given_parent_off"]);
+    for (std::size_t q = 0; q < tree.parent.size(); ++q) {
+      const int p = tree.parent[q];
+      if (p < -1 || p >= static_cast<int>(tree.parent.size()) || p == static_cast<int>(q)) {
+        throw FileError(name, 0, "tree_parent[" + std::to_string(q) + "] = " + std::to_string(p) +
+                                     "; expected -1 or another word's id");
+      }
+    }
+    for (const auto* probabilities : {&tree.p_z, &tree.p_z_given_parent_on, &tree.p_z_given_parent_off}) {
+      for (const double p : *probabilities) {
+        if (!(p > 0.0 && p < 1.0)) throw FileError(name, 0, "a tree probability outside (0, 1)");
+      }
+    }
+    if (!centres.empty() && !cv::checkRange(centres)) throw FileError(name, 0, "centres hold NaN or infinity");
+    return {FeatureTypeFromString(feature), centres, std::move(tree)};
+  } catch (const cv::Exception& e) {
+    throw FileError(name, 0, "expected a catgraph vocabulary (OpenCV YAML): " + e.msg);
+  } catch (const std::invalid_argument& e) {
+    throw FileError(name, 0, e.what());
+  }
+}
+
+}  // namespace catgraph
