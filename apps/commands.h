@@ -23,6 +23,7 @@ void AddSimulateCommand(CLI::App& app, std::ostream& out);
 void AddConvertCommand(CLI::App& app, std::ostream& out);
 void AddPlotDatasetCommand(CLI::App& app, std::ostream& out);
 void AddVocabularyCommand(CLI::App& app, std::ostream& out);
+void AddLocalizeCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

@@ -26,6 +26,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddConvertCommand(app, out);
   AddPlotDatasetCommand(app, out);
   AddVocabularyCommand(app, out);
+  AddLocalizeCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

@@ -1,0 +1,119 @@
+#include "frontend/localization.h"
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+#include <cmath>
+#include <thread>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "backend/io/file_error.h"
+
+namespace catgraph {
+namespace {
+
+std::vector<WordSet> WordsOfFrames(const Dataset& d, const Vocabulary& vocabulary, int threads,
+                                   const LocalizationOptions& options) {
+  std::vector<WordSet> words(d.frames.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  std::exception_ptr error;
+  std::mutex mutex;
+  auto work = [&](bool report) {
+    for (std::size_t i = next++; i < d.frames.size(); i = next++) {
+      try {
+        const cv::Mat image = cv::imread(d.ImagePath(i).string(), cv::IMREAD_COLOR);
+        if (image.empty()) throw FileError(d.ImagePath(i).string(), 0, "cannot decode the image");
+        words[i] = vocabulary.Words(image);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!error) error = std::current_exception();
+      }
+      ++done;
+      if (report && options.on_progress) options.on_progress("features", done.load(), d.frames.size());
+    }
+  };
+  const int n = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < n; ++i) pool.emplace_back(work, false);
+  work(true);  // the calling thread works too, and reports
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  if (options.on_progress) options.on_progress("features", d.frames.size(), d.frames.size());
+  return words;
+}
+
+}  // namespace
+
+LocalizationResult Localize(const Dataset& d, const Vocabulary& vocabulary,
+                            const LocalizationOptions& options) {
+  const std::vector<WordSet> words = WordsOfFrames(d, vocabulary, options.threads, options);
+  const FabMapModel model(vocabulary.tree(), FabMapOptions{});
+  CatGraphFilter filter(model, options.filter);
+  LocalizationResult result;
+  std::vector<std::size_t> sizes;
+  for (const auto& w : words) sizes.push_back(w.size());
+  std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(sizes.size() / 2), sizes.end());
+  result.words_per_frame_median = sizes.empty() ? 0 : sizes[sizes.size() / 2];
+
+  // Odometry and (when present) ground truth at the frame times.
+  std::vector<Pose2> odometry, truth;
+  for (const auto& f : d.frames) {
+    odometry.push_back(InterpolatePose(d.odometry, f.timestamp_s));
+    if (d.HasGroundTruth()) truth.push_back(InterpolatePose(d.ground_truth, f.timestamp_s));
+  }
+  const Eigen::Vector3d& s = options.filter.motion_sigma;
+  const Eigen::Matrix3d information = s.cwiseProduct(s).cwiseInverse().asDiagonal();
+  auto frame_of = [&](int node) { return filter.graph().node(node).frame; };
+  auto location_error = [&](std::size_t k, const LocationHypothesis& h) {
+    if (truth.empty() || h.edge < 0) return kNoError;
+    const GraphEdge& e = filter.graph().edge(h.edge);
+    const Eigen::Vector2d a = truth[static_cast<std::size_t>(frame_of(e.from))].translation();
+    const Eigen::Vector2d b = truth[static_cast<std::size_t>(frame_of(e.to))].translation();
+    return (truth[k].translation() - (a + h.alpha * (b - a))).norm();
+  };
+
+  for (std::size_t k = 0; k < d.frames.size(); ++k) {
+    const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
+    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, words[k]);
+    FrameLocalization f;
+    f.frame = static_cast<int>(k);
+    f.traversal = d.frames[k].traversal;
+    f.best = step.best;
+    f.new_place_probability = step.new_place_probability;
+    if (step.best.edge >= 0) {
+      f.edge_from_frame = frame_of(filter.graph().edge(step.best.edge).from);
+      f.edge_to_frame = frame_of(filter.graph().edge(step.best.edge).to);
+    }
+    f.error_m = location_error(k, step.best);
+
+    const PoseId id(static_cast<std::int64_t>(k));
+    result.graph.vertices[id] = {id, odometry[k], k == 0};
+    if (k > 0) {
+      result.graph.constraints.push_back({ClosureId(static_cast<std::int64_t>(result.graph.constraints.size())),
+                                          PoseId(static_cast<std::int64_t>(k - 1)), id,
+                                          {u, information}, ClosureKind::kOdometry, {}, {}, {}});
+    }
+    if (step.closure) {
+      f.closure = true;
+      f.matched_frame = frame_of(step.matched_node);
+      VisualClosure c;
+      c.id = static_cast<int>(result.graph.constraints.size());
+      c.frame = f.frame;
+      c.matched_frame = f.matched_frame;
+      c.T_frame_matched = step.T_node_matched;
+      c.hypothesis = step.best.value;
+      c.error_m = f.error_m;
+      result.closures.push_back(c);
+      result.graph.constraints.push_back({ClosureId(c.id), id, PoseId(c.matched_frame),
+                                          {c.T_frame_matched, information}, ClosureKind::kVisual, {}, {}, {}});
+    }
+    result.frames.push_back(f);
+    if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
+      options.on_progress("filter", k + 1, d.frames.size());
+    }
+  }
+  return result;
+}
+
+}  // namespace catgraph

@@ -1,0 +1,61 @@
+// Appearance-based localisation of a whole dataset with CAT-Graph: every
+// frame's words, the filter run over the frames in order with the odometry
+// interpolated at the frame times, and what came of it — the best hypothesis
+// per frame, the visual loop closures, and the pose graph (odometry edges
+// and visual closures) for the back end. Behind `catgraph localize`.
+#ifndef CATGRAPH_FRONTEND_LOCALIZATION_H_
+#define CATGRAPH_FRONTEND_LOCALIZATION_H_
+
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "backend/graph/pose_graph.h"
+#include "backend/io/dataset.h"
+#include "frontend/cat_graph.h"
+#include "frontend/vocabulary.h"
+
+namespace catgraph {
+
+inline constexpr double kNoError = std::numeric_limits<double>::quiet_NaN();
+
+struct FrameLocalization {
+  int frame = -1;
+  int traversal = 1;
+  LocationHypothesis best;
+  int edge_from_frame = -1, edge_to_frame = -1;  // frames of the best edge's ends; -1: none
+  double new_place_probability = 1.0;
+  bool closure = false;
+  int matched_frame = -1;         // frame of the matched node (closures)
+  double error_m = kNoError;      // best hypothesis against ground truth
+};
+
+struct VisualClosure {
+  int id = 0;
+  int frame = -1;                 // the current frame
+  int matched_frame = -1;         // the frame nearest to the matched location
+  Pose2 T_frame_matched;          // matched frame's pose in the current frame's
+  double hypothesis = 0.0;
+  double error_m = kNoError;      // position error of the matched location
+};
+
+struct LocalizationResult {
+  std::vector<FrameLocalization> frames;
+  std::vector<VisualClosure> closures;
+  PoseGraph2 graph;               // vertex id = frame index; initial guess = odometry
+  std::size_t words_per_frame_median = 0;
+};
+
+struct LocalizationOptions {
+  CatGraphOptions filter;
+  int threads = 0;                // feature extraction; 0: every core
+  // Called from the calling thread: stage is "features" or "filter".
+  std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;
+};
+
+LocalizationResult Localize(const Dataset& dataset, const Vocabulary& vocabulary,
+                            const LocalizationOptions& options);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_FRONTEND_LOCALIZATION_H_

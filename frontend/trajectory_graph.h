@@ -1,0 +1,97 @@
+// CAT-Graph's continuous trajectory graph (docs/catgraph-spec.md §1.2–1.4):
+// one node per image with its bag of words, directed edges carrying the
+// relative pose u_mn (N_n in the frame of N_m), and local graphs — the
+// neighbourhood of a point on an edge laid out in metric coordinates by a
+// Dijkstra search along the edges, first (shortest-path) arrival winning, so
+// that the graph stays locally Euclidean while it is not globally metric.
+//
+// Particles live on edges: (edge, fraction α from its start, direction). The
+// point at α is α·u (translation and heading interpolated linearly in the
+// frame of the edge's start node).
+//
+// Thread-compatible.
+#ifndef CATGRAPH_FRONTEND_TRAJECTORY_GRAPH_H_
+#define CATGRAPH_FRONTEND_TRAJECTORY_GRAPH_H_
+
+#include <functional>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "backend/graph/pose2.h"
+#include "frontend/fabmap.h"
+
+namespace catgraph {
+
+enum class EdgeType { kOdometry, kVisualLoop, kOdometricLoop };
+
+struct GraphNode {
+  int frame = -1;             // index in the dataset's frames.csv
+  double time_s = 0.0;
+  double path_length_m = 0.0;  // odometry distance from the first node
+  WordSet words;
+  std::vector<int> edges;      // incident edges, both directions
+};
+
+struct GraphEdge {
+  int from = -1, to = -1;
+  Pose2 u;                     // N_to in the frame of N_from
+  EdgeType type = EdgeType::kOdometry;
+  double length_m = 0.0;
+};
+
+class TrajectoryGraph {
+ public:
+  int AddNode(int frame, double time_s, double path_length_m, WordSet words);
+  // Throws std::invalid_argument on unknown nodes or a self-edge.
+  int AddEdge(int from, int to, const Pose2& u, EdgeType type);
+
+  const std::vector<GraphNode>& nodes() const { return nodes_; }
+  const std::vector<GraphEdge>& edges() const { return edges_; }
+  const GraphNode& node(int id) const { return nodes_.at(static_cast<std::size_t>(id)); }
+  const GraphEdge& edge(int id) const { return edges_.at(static_cast<std::size_t>(id)); }
+
+ private:
+  std::vector<GraphNode> nodes_;
+  std::vector<GraphEdge> edges_;
+};
+
+// The point at fraction alpha along u: (α·Δx, α·Δy, α·Δθ).
+inline Pose2 PointOnEdge(const Pose2& u, double alpha) {
+  return {alpha * u.x(), alpha * u.y(), alpha * u.theta()};
+}
+
+// A local graph: node poses in the frame of one anchor node, and the edges
+// whose both ends were reached.
+struct LocalGraph {
+  std::unordered_map<int, Pose2> pose;  // node id -> pose in the anchor's frame
+  std::vector<int> edges;               // edge ids with both endpoints in `pose`
+
+  bool Contains(int node) const { return pose.count(node) != 0; }
+  // The pose of the point at alpha on edge e, in the anchor's frame; the
+  // edge must be in the local graph.
+  Pose2 PointPose(const TrajectoryGraph& graph, int edge, double alpha) const;
+};
+
+// Nodes within `radius_m` (straight-line, in the anchor's frame) of the
+// anchor node, reached along edges through eligible nodes, shortest path
+// first. `eligible` may be empty (every node eligible); the anchor is always
+// included.
+LocalGraph BuildLocalGraph(const TrajectoryGraph& graph, int anchor, double radius_m,
+                           const std::function<bool(int)>& eligible);
+
+// The nearest point of the local graph's edges to `y` (x, y only): edge,
+// fraction along it, path heading there, and the distance. Edges shorter
+// than 1 µm are skipped. Empty when the local graph has no usable edge.
+struct Projection {
+  int edge = -1;
+  double alpha = 0.0;
+  Pose2 pose;          // position on the edge, path heading θ_s
+  double distance_m = 0.0;
+};
+std::optional<Projection> ProjectOntoLocalGraph(const TrajectoryGraph& graph, const LocalGraph& local,
+                                                const Pose2& y);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_FRONTEND_TRAJECTORY_GRAPH_H_
