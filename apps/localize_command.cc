@@ -66,7 +66,9 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
   const LocalizationResult r = Localize(d, vocabulary, o.localization);
 
   const std::filesystem::path dir(o.output);
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
   WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
     f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
          "matched_frame,error_m\n";
