@@ -14,6 +14,7 @@
 #include "backend/graph/name_table.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/file_error.h"
+#include "backend/io/internal/text_line.h"
 
 namespace catgraph {
 namespace {
@@ -156,15 +157,10 @@ void Vocabulary::Save(const std::filesystem::path& path) const {
 
 Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::error_code ec;
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (ec) throw FileError(name, 0, "cannot read the file; expected a vocabulary (catgraph vocabulary train)");
-  if (bytes > kMaxFileBytes) throw FileError(name, 0, "is larger than 512 MB; expected a vocabulary file");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
+  const std::string text =
+      ReadWholeFile(path, kMaxFileBytes, "a vocabulary file (catgraph vocabulary train)");
   try {
-    cv::FileStorage fs(text.str(), cv::FileStorage::READ | cv::FileStorage::MEMORY);
+    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     int version = 0;
     fs["format_version"] >> version;
     if (version != kFormatVersion) {

@@ -51,7 +51,7 @@ std::uint64_t FrameNoiseSeed(std::uint64_t seed, std::size_t index) {
 OfficeWorld MakeWorld(const Scenario& s) {
   std::vector<int> ids;
   for (const auto& t : s.traversals) ids.push_back(t.id);
-  return OfficeWorld(s.floor_plan, s.furniture, s.lighting, s.changed_regions, s.camera, ids);
+  return OfficeWorld(s.floor_plan, s.furniture, s.lighting, s.camera, ids);
 }
 
 RobotRun DriveScenario(const Scenario& s, std::uint64_t seed) {

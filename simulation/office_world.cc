@@ -97,12 +97,11 @@ OfficeWorld& OfficeWorld::operator=(OfficeWorld&&) noexcept = default;
 
 OfficeWorld::OfficeWorld(FloorPlan floor_plan, std::vector<Furniture> furniture,
                          std::vector<LightingRegion> lighting,
-                         std::vector<ChangedRegion> changed_regions, CameraOptions camera,
+                         CameraOptions camera,
                          std::vector<int> traversals)
     : floor_plan_(std::move(floor_plan)),
       furniture_(std::move(furniture)),
       lighting_(std::move(lighting)),
-      changed_regions_(std::move(changed_regions)),
       camera_(camera),
       traversals_(std::move(traversals)),
       scene_(std::make_unique<Scene>()) {
@@ -163,9 +162,6 @@ OfficeWorld::OfficeWorld(FloorPlan floor_plan, std::vector<Furniture> furniture,
     const Box2& b = item.footprint;
     it.top_texture = add_texture(MakeFurnitureTexture(item.style, b.x1 - b.x0, b.y1 - b.y0, true, rng));
     s.items.push_back(it);
-  }
-  for (const auto& r : changed_regions_) {
-    if (r.polygon.size() < 3) throw std::invalid_argument("changed region '" + r.name + "': expected >= 3 points");
   }
   for (const auto& r : lighting_) {
     if (r.polygon.size() < 3) throw std::invalid_argument("lighting region '" + r.name + "': expected >= 3 points");

@@ -99,8 +99,8 @@ class OfficeWorld {
   // world knows what changes between them. Throws std::invalid_argument on
   // inconsistent geometry.
   OfficeWorld(FloorPlan floor_plan, std::vector<Furniture> furniture,
-              std::vector<LightingRegion> lighting, std::vector<ChangedRegion> changed_regions,
-              CameraOptions camera, std::vector<int> traversals);
+              std::vector<LightingRegion> lighting, CameraOptions camera,
+              std::vector<int> traversals);
   ~OfficeWorld();
   OfficeWorld(OfficeWorld&&) noexcept;
   OfficeWorld& operator=(OfficeWorld&&) noexcept;
@@ -112,7 +112,6 @@ class OfficeWorld {
 
   const FloorPlan& floor_plan() const { return floor_plan_; }
   const std::vector<Furniture>& furniture() const { return furniture_; }
-  const std::vector<ChangedRegion>& changed_regions() const { return changed_regions_; }
   const CameraOptions& camera() const { return camera_; }
   // Wall segments (x0, y0, x1, y1) of the floor plan, for pictures.
   std::vector<Eigen::Vector4d> WallSegments() const;
@@ -122,7 +121,6 @@ class OfficeWorld {
   FloorPlan floor_plan_;
   std::vector<Furniture> furniture_;
   std::vector<LightingRegion> lighting_;
-  std::vector<ChangedRegion> changed_regions_;
   CameraOptions camera_;
   std::vector<int> traversals_;
   std::unique_ptr<Scene> scene_;  // textures and per-face geometry

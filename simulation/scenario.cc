@@ -143,20 +143,6 @@ YAML::Node LoadYaml(std::string_view text, const std::string& source) {
   }
 }
 
-std::string ReadSmallFile(const std::filesystem::path& path, std::string_view expected) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  std::ifstream in = OpenForReading(path, expected);
-  if (!ec && size > kMaxScenarioBytes) {
-    throw FileError(path.string(), 0, "is " + std::to_string(size) + " bytes; expected at most " +
-                                          std::to_string(kMaxScenarioBytes) + " for " +
-                                          std::string(expected));
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 FloorPlan ParseWorld(const YAML::Node& node, const std::string& source) {
   MapReader r(node, source, "world");
   FloorPlan plan;
@@ -198,7 +184,7 @@ FloorPlan ResolveWorld(const YAML::Node& node, const std::string& source,
                         path.string() + ")");
   }
   const std::string world_source = path.string();
-  return ParseWorld(LoadYaml(ReadSmallFile(path, "a world file"), world_source), world_source);
+  return ParseWorld(LoadYaml(ReadWholeFile(path, kMaxScenarioBytes, "a world file"), world_source), world_source);
 }
 
 template <typename Fn>
@@ -304,7 +290,7 @@ Scenario LoadScenario(const std::string& name_or_path) {
     throw FileError(name_or_path, 0, "is neither a built-in scenario (" + names +
                                          ") nor a scenario file");
   }
-  return ParseScenario(ReadSmallFile(path, "a scenario file (YAML)"), path.string(),
+  return ParseScenario(ReadWholeFile(path, kMaxScenarioBytes, "a scenario file (YAML)"), path.string(),
                        path.parent_path());
 }
 

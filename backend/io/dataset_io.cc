@@ -163,23 +163,14 @@ nlohmann::json PolygonToJson(const Polygon2& polygon) {
 
 DatasetMeta ReadMeta(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  std::ifstream in = OpenForReading(path, "meta.json (the dataset's description)");
-  if (!ec && size > kMaxMetaBytes) {
-    throw FileError(name, 0, "is " + std::to_string(size) + " bytes; expected at most " +
-                                 std::to_string(kMaxMetaBytes));
-  }
+  const std::string text = ReadWholeFile(path, kMaxMetaBytes, "meta.json (the dataset's description)");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
-    // nlohmann reports a byte offset; turn it into a line.
-    std::ifstream again(path, std::ios::binary);
-    int line = 1;
-    char c;
-    for (std::size_t i = 0; i + 1 < e.byte && again.get(c); ++i) line += c == '\n';
-    throw FileError(name, line, std::string("expected valid JSON: ") + e.what());
+    // nlohmann reports the 1-based byte offset of the error.
+    throw FileError(name, LineOfOffset(text, e.byte > 0 ? e.byte - 1 : 0),
+                    std::string("expected valid JSON: ") + e.what());
   }
   DatasetMeta meta;
   try {

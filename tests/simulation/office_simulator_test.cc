@@ -225,7 +225,7 @@ OfficeWorld Room(bool with_box) {
   if (with_box) furniture.push_back({"box", FurnitureStyle::kBoxes, {7.0, 4.5, 8.0, 5.5}, 0.5, {1}});
   CameraOptions camera;
   camera.noise_sigma = 0.0;
-  return OfficeWorld(plan, furniture, {}, {}, camera, {1});
+  return OfficeWorld(plan, furniture, {}, camera, {1});
 }
 
 TEST_CASE("the renderer projects walls, floor and ceiling where the camera model puts them",
@@ -290,7 +290,7 @@ TEST_CASE("furniture missing in a traversal marks the pixels it would cover as c
   FloorPlan plan;
   plan.building = {0, 0, 10, 10};
   CameraOptions camera;
-  const OfficeWorld world(plan, {{"box", FurnitureStyle::kBoxes, {7.0, 4.0, 8.0, 6.0}, 2.0, {2}}}, {}, {},
+  const OfficeWorld world(plan, {{"box", FurnitureStyle::kBoxes, {7.0, 4.0, 8.0, 6.0}, 2.0, {2}}}, {},
                           camera, {1, 2});
   RenderDetail with, without;
   world.Render(Pose2(5.0, 5.0, 0.0), 2, 0, &with);

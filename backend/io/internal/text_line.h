@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <istream>
 #include <string>
 #include <string_view>
@@ -175,6 +176,29 @@ inline std::ifstream OpenForReading(const std::filesystem::path& path, std::stri
                         : "no such file; expected " + std::string(expected));
   }
   return in;
+}
+
+// The whole content of `path`, refused when larger than `max_bytes` (hostile
+// input), with OpenForReading's errors; `expected` names what it should be.
+inline std::string ReadWholeFile(const std::filesystem::path& path, std::uintmax_t max_bytes,
+                                 std::string_view expected) {
+  std::ifstream in = OpenForReading(path, expected);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > max_bytes) {
+    throw FileError(path.string(), 0,
+                    "is " + std::to_string(size) + " bytes; expected at most " +
+                        std::to_string(max_bytes) + " for " + std::string(expected));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The 1-based line of byte `offset` (0-based) in `text`.
+inline int LineOfOffset(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
 }
 
 }  // namespace catgraph
