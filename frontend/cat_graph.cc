@@ -30,109 +30,184 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.motion_sigma.minCoeff() > 0.0)) fail("motion_sigma must be > 0");
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
+  if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
+  if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
+  if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
+  if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
 
 CatGraphFilter::CatGraphFilter(const FabMapModel& model, CatGraphOptions options)
-    : model_(model), options_(options), rng_(options.seed) {
+    : model_(model), options_(options), rng_(options.seed), eligible_([this](int n) { return Eligible(n); }) {
   Validate(options_);
 }
 
+int CatGraphFilter::EligibleBelow() const {
+  // Time and path length grow with the node id, so the eligible nodes are a
+  // prefix.
+  const auto& nodes = graph_.nodes();
+  const auto first_ineligible = std::partition_point(nodes.begin(), nodes.end(), [this](const GraphNode& n) {
+    return time_s_ - n.time_s >= options_.exclusion_window_s &&
+           path_length_m_ - n.path_length_m >= options_.exclusion_window_m;
+  });
+  return static_cast<int>(first_ineligible - nodes.begin());
+}
+
 bool CatGraphFilter::Eligible(int node) const {
+  if (node >= eligible_below_) return false;
+  if (!options_.odometric_gate) return true;
   const GraphNode& n = graph_.node(node);
-  return time_s_ - n.time_s >= options_.exclusion_window_s &&
-         path_length_m_ - n.path_length_m >= options_.exclusion_window_m;
+  const double gate = options_.odometric_gate_base_m +
+                      options_.odometric_gate_fraction * (path_length_m_ - n.path_length_m);
+  return (odometry_pose_.translation() - n.odometry_pose.translation()).squaredNorm() <= gate * gate;
 }
 
 void CatGraphFilter::SeedUniformly(std::size_t count, std::vector<Particle>& out) {
-  // Eligible, non-degenerate edges, drawn in proportion to their length.
-  std::vector<int> edges;
-  std::vector<double> cumulative;
-  for (std::size_t id = 0; id < graph_.edges().size(); ++id) {
-    const GraphEdge& e = graph_.edges()[id];
-    if (e.length_m < 1e-6 || !Eligible(e.from) || !Eligible(e.to)) continue;
-    edges.push_back(static_cast<int>(id));
-    cumulative.push_back((cumulative.empty() ? 0.0 : cumulative.back()) + e.length_m);
+  // Eligible, non-degenerate edges, drawn in proportion to their length. An
+  // edge's newer end is its largest node id, which never decreases with the
+  // edge id, so the edges older than the exclusion windows are a prefix;
+  // draws landing outside the odometric gate are drawn again.
+  const auto& edges = graph_.edges();
+  while (edge_length_sum_.size() < edges.size()) {
+    const double before = edge_length_sum_.empty() ? 0.0 : edge_length_sum_.back();
+    edge_length_sum_.push_back(before + edges[edge_length_sum_.size()].length_m);
   }
-  if (edges.empty()) return;
+  const auto prefix = static_cast<std::size_t>(
+      std::partition_point(edges.begin(), edges.end(),
+                           [this](const GraphEdge& e) { return std::max(e.from, e.to) < eligible_below_; }) -
+      edges.begin());
+  if (prefix == 0 || edge_length_sum_[prefix - 1] <= 0.0) return;
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  constexpr int kMaxDraws = 64;  // per particle, before giving the particle up
   for (std::size_t i = 0; i < count; ++i) {
-    const double r = unit(rng_) * cumulative.back();
-    const auto k = static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) -
-                                            cumulative.begin());
-    out.push_back({edges[std::min(k, edges.size() - 1)], unit(rng_), unit(rng_) < 0.5 ? 1 : -1, 0.0});
+    for (int attempt = 0; attempt < kMaxDraws; ++attempt) {
+      const double r = unit(rng_) * edge_length_sum_[prefix - 1];
+      const auto k = std::min(prefix - 1, static_cast<std::size_t>(
+                                              std::upper_bound(edge_length_sum_.begin(),
+                                                               edge_length_sum_.begin() + static_cast<long>(prefix), r) -
+                                              edge_length_sum_.begin()));
+      const GraphEdge& e = edges[k];
+      if (e.length_m < 1e-6 || !Eligible(e.from) || !Eligible(e.to)) continue;
+      out.push_back({static_cast<int>(k), unit(rng_), unit(rng_) < 0.5 ? 1 : -1, 0.0});
+      break;
+    }
   }
 }
 
-// Moves one particle by u plus noise in its edge's local graph and projects
-// it back; returns log Eq 1 (−inf when there is nowhere to project).
-double CatGraphFilter::MotionAndProjection(Particle& p, const Pose2& u) {
-  const GraphEdge& e = graph_.edge(p.edge);
-  auto it = motion_graphs_.find(e.from);
-  if (it == motion_graphs_.end()) {
-    it = motion_graphs_
-             .emplace(e.from, BuildLocalGraph(graph_, e.from, options_.motion_radius_m + e.length_m,
-                                              [this](int n) { return Eligible(n); }))
-             .first;
-  }
-  const LocalGraph& local = it->second;
-  if (!local.Contains(e.to)) return kNegInf;
-  Pose2 x = local.PointPose(graph_, p.edge, p.alpha);
-  if (p.direction < 0) x = x * Pose2(0.0, 0.0, std::numbers::pi);
+void CatGraphFilter::MotionAndProjection(const Pose2& u) {
+  // Particles in order of their edge's start node, so that each local graph
+  // is built once per step.
+  order_.resize(particles_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+  auto anchor = [this](std::size_t i) { return graph_.edge(particles_[i].edge).from; };
+  std::stable_sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return anchor(a) < anchor(b); });
   const Eigen::Vector3d& s = options_.motion_sigma;
   std::normal_distribution<double> normal(0.0, 1.0);
-  const Pose2 noisy(u.x() + s[0] * normal(rng_), u.y() + s[1] * normal(rng_), u.theta() + s[2] * normal(rng_));
-  const Pose2 y = x * noisy;
-  const auto projection = ProjectOntoLocalGraph(graph_, local, y);
-  if (!projection) return kNegInf;
-  const double path_heading = projection->pose.theta();
-  const int direction = std::abs(WrapAngle(y.theta() - path_heading)) <= std::numbers::pi / 2 ? 1 : -1;
-  const double heading = direction > 0 ? path_heading : path_heading + std::numbers::pi;
-  p = {projection->edge, projection->alpha, direction, p.log_weight};
-  const double dx = projection->pose.x() - y.x(), dy = projection->pose.y() - y.y();
-  double m = dx * dx / (s[0] * s[0]) + dy * dy / (s[1] * s[1]);
-  if (options_.heading_in_position_likelihood) {
-    const double dt = WrapAngle(heading - y.theta());
-    m += dt * dt / (s[2] * s[2]);
+  int built = -1;
+  for (const std::size_t i : order_) {
+    Particle& p = particles_[i];
+    const GraphEdge& e = graph_.edge(p.edge);
+    if (e.from != built) {
+      builder_.Build(graph_, e.from, options_.motion_radius_m + e.length_m, eligible_, local_);
+      built = e.from;
+    }
+    const std::optional<Pose2> start = local_.PointPose(p.edge, p.alpha);
+    if (!start) {  // the edge's end is no longer eligible
+      p.log_weight = kNegInf;
+      continue;
+    }
+    const Pose2 x = p.direction < 0 ? *start * Pose2(0.0, 0.0, std::numbers::pi) : *start;
+    const Pose2 noisy(u.x() + s[0] * normal(rng_), u.y() + s[1] * normal(rng_), u.theta() + s[2] * normal(rng_));
+    const Pose2 y = x * noisy;
+    const auto projection = ProjectOntoLocalGraph(local_, y);
+    if (!projection) {
+      p.log_weight = kNegInf;
+      continue;
+    }
+    const double path_heading = projection->pose.theta();
+    const int direction = std::abs(WrapAngle(y.theta() - path_heading)) <= std::numbers::pi / 2 ? 1 : -1;
+    const double heading = direction > 0 ? path_heading : path_heading + std::numbers::pi;
+    p.edge = projection->edge;
+    p.alpha = projection->alpha;
+    p.direction = direction;
+    const double dx = projection->pose.x() - y.x(), dy = projection->pose.y() - y.y();
+    double m = dx * dx / (s[0] * s[0]) + dy * dy / (s[1] * s[1]);
+    if (options_.heading_in_position_likelihood) {
+      const double dt = WrapAngle(heading - y.theta());
+      m += dt * dt / (s[2] * s[2]);
+    }
+    p.log_weight += -0.5 * m;  // Eq 1
   }
-  return -0.5 * m;
 }
 
-LocationHypothesis CatGraphFilter::BestHypothesis() const {
+LocationHypothesis CatGraphFilter::BestHypothesis() {
   LocationHypothesis best;
-  if (particles_.empty()) return best;
-  // Eq 4 at every particle is O(n_p²); candidates are instead the heaviest
-  // particle of every 0.1 m stretch of each occupied edge.
-  std::map<int, std::vector<std::size_t>> by_edge;
+  // Particles grouped by edge, with each edge's total weight.
+  order_.clear();
   for (std::size_t i = 0; i < particles_.size(); ++i) {
-    if (particles_[i].log_weight > -std::numeric_limits<double>::infinity()) by_edge[particles_[i].edge].push_back(i);
+    if (particles_[i].log_weight > kNegInf) order_.push_back(i);
   }
+  if (order_.empty()) return best;
+  std::stable_sort(order_.begin(), order_.end(),
+                   [this](std::size_t a, std::size_t b) { return particles_[a].edge < particles_[b].edge; });
+  struct EdgeGroup {
+    int edge;
+    std::size_t begin, end;  // range in order_
+    double weight;
+  };
+  std::vector<EdgeGroup> groups;
+  for (std::size_t k = 0; k < order_.size(); ++k) {
+    const Particle& p = particles_[order_[k]];
+    if (groups.empty() || groups.back().edge != p.edge) groups.push_back({p.edge, k, k, 0.0});
+    groups.back().end = k + 1;
+    groups.back().weight += std::exp(p.log_weight);
+  }
+  auto group_of = [&](int edge) -> const EdgeGroup* {
+    const auto it = std::lower_bound(groups.begin(), groups.end(), edge,
+                                     [](const EdgeGroup& g, int id) { return g.edge < id; });
+    return it != groups.end() && it->edge == edge ? &*it : nullptr;
+  };
+  // Eq 4 at every particle is O(n_p²). Candidates are the heaviest particle
+  // of every 0.1 m stretch of the heaviest edges: a disc holding mass T_h
+  // spread over M edges has an edge of weight >= T_h / M, so it is among the
+  // K heaviest whenever K > M (1 - T_h) / T_h (docs/frontend.md).
+  std::vector<const EdgeGroup*> candidates;
+  for (const EdgeGroup& g : groups) candidates.push_back(&g);
+  const auto k = std::min(candidates.size(), static_cast<std::size_t>(options_.hypothesis_candidate_edges));
+  std::partial_sort(candidates.begin(), candidates.begin() + static_cast<long>(k), candidates.end(),
+                    [](const EdgeGroup* a, const EdgeGroup* b) {
+                      return a->weight > b->weight || (a->weight == b->weight && a->edge < b->edge);
+                    });
+  candidates.resize(k);
+
   const double r = options_.hypothesis_radius_m;
-  for (const auto& [edge, members] : by_edge) {
-    const GraphEdge& e = graph_.edge(edge);
-    std::map<int, std::size_t> candidates;  // bin -> particle
-    for (const std::size_t i : members) {
+  std::vector<std::pair<Eigen::Vector2d, double>> nearby;
+  std::map<int, std::size_t> bins;  // 0.1 m bin -> heaviest particle
+  for (const EdgeGroup* g : candidates) {
+    const GraphEdge& e = graph_.edge(g->edge);
+    bins.clear();
+    for (std::size_t q = g->begin; q < g->end; ++q) {
+      const std::size_t i = order_[q];
       const int bin = static_cast<int>(particles_[i].alpha * e.length_m / 0.1);
-      auto [it, inserted] = candidates.try_emplace(bin, i);
+      auto [it, inserted] = bins.try_emplace(bin, i);
       if (!inserted && particles_[i].log_weight > particles_[it->second].log_weight) it->second = i;
     }
     // Every particle that can lie within r of a point of this edge; only
     // eligible nodes, so that the location never lands on a recent node
     // reached through a loop edge.
-    const LocalGraph local = BuildLocalGraph(graph_, e.from, r + e.length_m + 1e-6,
-                                             [this](int n) { return Eligible(n); });
-    std::vector<std::pair<Eigen::Vector2d, double>> nearby;
-    for (const int other : local.edges) {
-      const auto it = by_edge.find(other);
-      if (it == by_edge.end()) continue;
-      for (const std::size_t j : it->second) {
-        nearby.emplace_back(local.PointPose(graph_, other, particles_[j].alpha).translation(),
-                            std::exp(particles_[j].log_weight));
+    builder_.Build(graph_, e.from, r + e.length_m + 1e-6, eligible_, local_);
+    nearby.clear();
+    for (const LocalGraph::Segment& s : local_.segments) {
+      const EdgeGroup* other = group_of(s.edge);
+      if (other == nullptr) continue;
+      for (std::size_t q = other->begin; q < other->end; ++q) {
+        const Particle& p = particles_[order_[q]];
+        nearby.emplace_back(Interpolate(s.from, s.to, p.alpha).translation(), std::exp(p.log_weight));
       }
     }
-    for (const auto& [bin, i] : candidates) {
-      const Eigen::Vector2d c = local.PointPose(graph_, edge, particles_[i].alpha).translation();
+    for (const auto& [bin, i] : bins) {
+      const Eigen::Vector2d c = local_.PointPose(g->edge, particles_[i].alpha)->translation();
       double sum = 0.0;
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
       for (const auto& [q, w] : nearby) {
@@ -143,13 +218,10 @@ LocationHypothesis CatGraphFilter::BestHypothesis() const {
       // the argmax alone can sit up to d_h off; the location reported is the
       // weighted mean of the particles in the winning disc, projected back
       // onto the graph [D, docs/frontend.md].
-      best = {edge, particles_[i].alpha, particles_[i].direction, sum};
-      if (sum > 0.0) {
-        const Pose2 centre(mean.x() / sum, mean.y() / sum, 0.0);
-        if (const auto p = ProjectOntoLocalGraph(graph_, local, centre)) {
-          best.edge = p->edge;
-          best.alpha = p->alpha;
-        }
+      best = {g->edge, particles_[i].alpha, particles_[i].direction, sum};
+      if (const auto p = ProjectOntoLocalGraph(local_, Pose2(mean.x() / sum, mean.y() / sum, 0.0))) {
+        best.edge = p->edge;
+        best.alpha = p->alpha;
       }
     }
   }
@@ -160,7 +232,8 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const bool first = graph_.nodes().empty();
   time_s_ = time_s;
   if (!first) path_length_m_ += u.translation().norm();
-  motion_graphs_.clear();
+  if (!first) odometry_pose_ = odometry_pose_ * u;
+  eligible_below_ = EligibleBelow();
   CatGraphStep step;
   const FrameLikelihood likelihood = model_.ForFrame(words);
 
@@ -169,24 +242,38 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     for (Particle& p : particles_) p.log_weight = -std::log(static_cast<double>(particles_.size()));
   }
   // Motion, Eq 1 and Eq 2; weights are normalised among particles on entry.
-  std::unordered_map<int, double> node_log_likelihood;
+  // log p(z_k | L_m), once per step for every node a particle touches.
+  ++steps_;
+  node_ll_.resize(graph_.nodes().size());
+  node_ll_step_.resize(graph_.nodes().size(), 0);
   auto node_ll = [&](int n) {
-    auto [it, inserted] = node_log_likelihood.try_emplace(n, 0.0);
-    if (inserted) it->second = likelihood.LogLikelihood(graph_.node(n).words);
-    return it->second;
-  };
-  const double log_keep = std::log(1.0 - options_.new_place_prior);
-  for (Particle& p : particles_) {
-    const double log_motion = first ? 0.0 : MotionAndProjection(p, u);
-    if (log_motion == kNegInf) {
-      p.log_weight = kNegInf;
-      continue;
+    const auto i = static_cast<std::size_t>(n);
+    if (node_ll_step_[i] != steps_) {
+      node_ll_step_[i] = steps_;
+      node_ll_[i] = likelihood.LogLikelihood(graph_.node(n).words);
     }
+    return node_ll_[i];
+  };
+  // Prior mass of new place: p_new while the robot was in a new place, the
+  // leave probability while it was on the map, mixed by last step's posterior
+  // [D, docs/frontend.md].
+  const double prior_new =
+      mapped_mass_ * options_.leave_probability + (1.0 - mapped_mass_) * options_.new_place_prior;
+  const double log_keep = std::log(1.0 - prior_new);
+  if (!first) MotionAndProjection(u);
+  for (Particle& p : particles_) {
+    if (p.log_weight == kNegInf) continue;
     const GraphEdge& e = graph_.edge(p.edge);
+    // Direction +1 faces the way the nodes' camera faced (a node's frame is
+    // the robot's pose). A forward camera facing the other way sees what the
+    // nodes never saw: to such a particle the frame is as likely as at a new
+    // place [D, docs/frontend.md].
+    const bool reversed = options_.forward_camera && p.direction < 0;
     const double log_observation =
-        LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
-                  p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
-    p.log_weight += log_motion + log_observation + log_keep;
+        reversed ? likelihood.LogNewPlaceLikelihood()
+                 : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
+                             p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
+    p.log_weight += log_observation + log_keep;
   }
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   if (!first) {
@@ -195,26 +282,27 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   }
   const Eigen::Vector3d u_mean = u_count_ > 0 ? Eigen::Vector3d(u_sum_ / u_count_) : Eigen::Vector3d::Zero();
   const Eigen::Vector3d du = (u.ToVector() - u_mean).cwiseQuotient(options_.motion_sigma);
-  const double log_new = std::log(options_.new_place_prior) + likelihood.LogNewPlaceLikelihood() -
+  const double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset -
                          0.5 * du.squaredNorm();
   double log_total = log_new;
   for (const Particle& p : particles_) log_total = LogSumExp(log_total, p.log_weight);
   for (Particle& p : particles_) p.log_weight -= log_total;
   step.new_place_probability = std::exp(log_new - log_total);
+  mapped_mass_ = particles_.empty() ? 0.0 : 1.0 - step.new_place_probability;
 
   // Location hypothesis and loop closure (Eq 4).
   step.best = BestHypothesis();
   const int previous = first ? -1 : static_cast<int>(graph_.nodes().size()) - 1;
-  step.node = graph_.AddNode(frame, time_s, path_length_m_, words);
+  step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, words);
   if (previous >= 0) graph_.AddEdge(previous, step.node, u, EdgeType::kOdometry);
   if (step.best.edge >= 0 && step.best.value > options_.closure_threshold) {
     const GraphEdge& e = graph_.edge(step.best.edge);
-    const LocalGraph local = BuildLocalGraph(graph_, e.from, e.length_m + 1e-6, {});
-    Pose2 x = local.PointPose(graph_, step.best.edge, step.best.alpha);
+    builder_.Build(graph_, e.from, e.length_m + 1e-6, {}, local_);
+    Pose2 x = *local_.PointPose(step.best.edge, step.best.alpha);
     if (step.best.direction < 0) x = x * Pose2(0.0, 0.0, std::numbers::pi);
     step.closure = true;
     step.matched_node = step.best.alpha < 0.5 ? e.from : e.to;
-    step.T_node_matched = x.Between(local.pose.at(step.matched_node));
+    step.T_node_matched = x.Between(local_.PoseOf(step.matched_node));
     step.loop_edge = graph_.AddEdge(step.node, step.matched_node, step.T_node_matched, EdgeType::kVisualLoop);
   }
 

@@ -23,6 +23,7 @@
 #define CATGRAPH_FRONTEND_CAT_GRAPH_H_
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <random>
 #include <vector>
@@ -42,10 +43,30 @@ struct CatGraphOptions {
   double hypothesis_radius_m = 1.0;        // d_h; > 0
   Eigen::Vector3d motion_sigma{0.05, 0.05, 0.005};  // Q = diag(σ)², per frame (m, m, rad); > 0
   double ess_threshold = 0.3;              // T_ess, a fraction of n_p; (0, 1]
-  double new_place_prior = 0.5;            // p_new (spec §6.3); (0, 1)
+  double new_place_prior = 0.5;            // p_new (spec §6.3) while in a new place; (0, 1)
+  // Prior mass of new place while the robot was localised on the map (the
+  // chance of leaving it in one frame) [D]; (0, 1).
+  double leave_probability = 0.05;
+  // Added to log p(z | new place) [D, docs/frontend.md]: FAB-MAP's mean field
+  // scores a corridor frame far below the places a few metres along the same
+  // corridor, which share its far view. Nats; chosen for 500-word SIFT
+  // vocabularies (docs/frontend.md); 0 is the spec as written.
+  double new_place_log_offset = 45.0;
   double exclusion_window_s = 10.0;        // nodes younger than this ...
   double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible
-  double motion_radius_m = 1.5;            // local-graph radius for the motion update; > 0
+  // Odometric gate [D, docs/frontend.md]: a node is not eligible while dead
+  // reckoning puts it farther from the robot than base + fraction × the path
+  // driven since it, i.e. while odometry alone rules out being there.
+  bool odometric_gate = true;
+  double odometric_gate_base_m = 1.0;      // >= 0
+  double odometric_gate_fraction = 0.1;    // of the path since the node; >= 0
+  double motion_radius_m = 0.5;            // local-graph radius for the motion update (> one
+                                           // frame's step + 3σ); > 0
+  int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1
+  // The camera sees one way (the paper's forward patch), so particles facing
+  // against the nodes' headings get the new-place likelihood, not the
+  // nodes'; false for a panoramic camera (spec Eq 2 as written).
+  bool forward_camera = true;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
   std::uint64_t seed = 1;
 };
@@ -82,6 +103,8 @@ class CatGraphFilter {
  public:
   // `model` must outlive the filter.
   CatGraphFilter(const FabMapModel& model, CatGraphOptions options);
+  CatGraphFilter(const CatGraphFilter&) = delete;  // holds a callback on itself
+  CatGraphFilter& operator=(const CatGraphFilter&) = delete;
 
   // One frame: `u` is the odometry since the previous frame (ignored for the
   // first), `words` the frame's observation.
@@ -92,10 +115,15 @@ class CatGraphFilter {
   const CatGraphOptions& options() const { return options_; }
 
  private:
+  // Nodes older than both exclusion windows have ids below this.
+  int EligibleBelow() const;
+  // Eligible for particles and local graphs this step: older than the
+  // exclusion windows and inside the odometric gate.
   bool Eligible(int node) const;
   void SeedUniformly(std::size_t count, std::vector<Particle>& out);
-  double MotionAndProjection(Particle& p, const Pose2& u);
-  LocationHypothesis BestHypothesis() const;
+  // Moves the particles by u plus noise and projects them back; adds log Eq 1.
+  void MotionAndProjection(const Pose2& u);
+  LocationHypothesis BestHypothesis();
 
   const FabMapModel& model_;
   CatGraphOptions options_;
@@ -105,7 +133,17 @@ class CatGraphFilter {
   double time_s_ = 0.0, path_length_m_ = 0.0;
   Eigen::Vector3d u_sum_ = Eigen::Vector3d::Zero();
   int u_count_ = 0;
-  std::unordered_map<int, LocalGraph> motion_graphs_;  // per anchor node, this step
+  int eligible_below_ = 0;                 // this step's EligibleBelow()
+  Pose2 odometry_pose_;                    // dead reckoning of the current frame
+  std::function<bool(int)> eligible_;      // Eligible() for the builder
+  std::vector<double> edge_length_sum_;    // prefix sums of edge lengths, by edge id
+  LocalGraphBuilder builder_;
+  LocalGraph local_;                       // scratch
+  std::vector<std::size_t> order_;         // scratch: particle indices by edge
+  std::vector<double> node_ll_;            // this step's log p(z | L_m) ...
+  std::vector<std::int64_t> node_ll_step_; // ... valid where equal to steps_
+  std::int64_t steps_ = 0;
+  double mapped_mass_ = 0.0;
 };
 
 }  // namespace catgraph

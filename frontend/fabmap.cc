@@ -98,9 +98,12 @@ ChowLiuTree LearnChowLiuTree(const std::vector<WordSet>& training, int vocabular
   return tree;
 }
 
-FabMapModel::FabMapModel(ChowLiuTree tree, FabMapOptions options)
-    : tree_(std::move(tree)), options_(options) {
+FabMapModel::FabMapModel(ChowLiuTree tree, FabMapOptions options, std::vector<WordSet> new_place_samples)
+    : tree_(std::move(tree)), options_(options), samples_(std::move(new_place_samples)) {
   if (tree_.vocabulary_size() < 1) throw std::invalid_argument("FabMapModel: empty Chow-Liu tree");
+  if (options_.new_place == NewPlaceModel::kSampled && samples_.empty()) {
+    throw std::invalid_argument("FabMapModel: the sampled new place needs sample observations");
+  }
   if (!(options_.p_observe_given_exists > 0.0 && options_.p_observe_given_exists <= 1.0)) {
     throw std::invalid_argument("p_observe_given_exists: expected (0, 1], found " +
                                 std::to_string(options_.p_observe_given_exists));
@@ -160,7 +163,16 @@ FrameLikelihood FabMapModel::ForFrame(const WordSet& z) const {
     const double with = WordTerm(q, PExists(q, true), z_q, z_p);
     f.base_ += without;
     f.delta_[i] = with - without;
-    f.new_place_ += WordTerm(q, tree_.p_z[i], z_q, z_p);
+    if (options_.new_place == NewPlaceModel::kMeanField) f.new_place_ += WordTerm(q, tree_.p_z[i], z_q, z_p);
+  }
+  if (options_.new_place == NewPlaceModel::kSampled) {
+    std::vector<double> l;
+    l.reserve(samples_.size());
+    for (const WordSet& s : samples_) l.push_back(f.LogLikelihood(s));
+    const double max = *std::max_element(l.begin(), l.end());
+    double sum = 0.0;
+    for (const double x : l) sum += std::exp(x - max);
+    f.new_place_ = max + std::log(sum / static_cast<double>(l.size()));
   }
   return f;
 }

@@ -58,18 +58,30 @@ ChowLiuTree LearnChowLiuTree(const std::vector<WordSet>& training, int vocabular
 // observations, n_a with a, n_b with b, n_ab with both.
 double MutualInformation(double n, double n_a, double n_b, double n_ab);
 
+// How likely an observation is at a place never visited (spec §2.7).
+enum class NewPlaceModel {
+  // FAB-MAP's mean field: p(e_q) replaced by the training marginal p(z_q).
+  kMeanField,
+  // openFABMAP's sampled new place: the log-mean-exp of the likelihoods
+  // against sample observations of other places (the training images).
+  kSampled,
+};
+
 struct FabMapOptions {
   double p_observe_given_exists = 0.39;  // p(z=1 | e=1) = 1 - p(z=0|e=1), Table I: 1 - 0.61; (0, 1]
   double p_observe_given_absent = 0.0;   // p(z=1 | e=0), Table I; [0, 1)
   bool naive_bayes = false;              // ignore the Chow-Liu tree
+  NewPlaceModel new_place = NewPlaceModel::kMeanField;
 };
 
 class FrameLikelihood;
 
 class FabMapModel {
  public:
-  // Throws std::invalid_argument on options out of range or an empty tree.
-  FabMapModel(ChowLiuTree tree, FabMapOptions options);
+  // Throws std::invalid_argument on options out of range, an empty tree, or
+  // a sampled new place without samples. `new_place_samples` (observations
+  // of places other than those to be recognised) serve NewPlaceModel::kSampled.
+  FabMapModel(ChowLiuTree tree, FabMapOptions options, std::vector<WordSet> new_place_samples = {});
 
   int vocabulary_size() const { return tree_.vocabulary_size(); }
   const ChowLiuTree& tree() const { return tree_; }
@@ -90,14 +102,15 @@ class FabMapModel {
 
   ChowLiuTree tree_;
   FabMapOptions options_;
+  std::vector<WordSet> samples_;
 };
 
 // log p(z | L) for one frame z against any node L, in O(|L|).
 class FrameLikelihood {
  public:
   double LogLikelihood(const WordSet& location) const;
-  // FAB-MAP's mean-field new-place likelihood log p(z | z_avg): p(e_q = s)
-  // replaced by the training marginal p(z_q = s) (spec §2.7).
+  // The new-place likelihood log p(z | z_avg) of the model's NewPlaceModel
+  // (spec §2.7).
   double LogNewPlaceLikelihood() const { return new_place_; }
 
  private:

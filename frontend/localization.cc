@@ -4,6 +4,8 @@
 #include <atomic>
 #include <mutex>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 #include <opencv2/imgcodecs.hpp>
@@ -11,10 +13,9 @@
 #include "backend/io/file_error.h"
 
 namespace catgraph {
-namespace {
 
-std::vector<WordSet> WordsOfFrames(const Dataset& d, const Vocabulary& vocabulary, int threads,
-                                   const LocalizationOptions& options) {
+std::vector<WordSet> ExtractWords(const Dataset& d, const Vocabulary& vocabulary,
+                                  const LocalizationOptions& options) {
   std::vector<WordSet> words(d.frames.size());
   std::atomic<std::size_t> next{0}, done{0};
   std::exception_ptr error;
@@ -33,7 +34,7 @@ std::vector<WordSet> WordsOfFrames(const Dataset& d, const Vocabulary& vocabular
       if (report && options.on_progress) options.on_progress("features", done.load(), d.frames.size());
     }
   };
-  const int n = threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int n = options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   std::vector<std::thread> pool;
   for (int i = 1; i < n; ++i) pool.emplace_back(work, false);
   work(true);  // the calling thread works too, and reports
@@ -43,12 +44,18 @@ std::vector<WordSet> WordsOfFrames(const Dataset& d, const Vocabulary& vocabular
   return words;
 }
 
-}  // namespace
-
 LocalizationResult Localize(const Dataset& d, const Vocabulary& vocabulary,
                             const LocalizationOptions& options) {
-  const std::vector<WordSet> words = WordsOfFrames(d, vocabulary, options.threads, options);
   const FabMapModel model(vocabulary.tree(), FabMapOptions{});
+  return Localize(d, ExtractWords(d, vocabulary, options), model, options);
+}
+
+LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
+                            const LocalizationOptions& options) {
+  if (words.size() != d.frames.size()) {
+    throw std::invalid_argument("Localize: " + std::to_string(words.size()) + " word sets for " +
+                                std::to_string(d.frames.size()) + " frames");
+  }
   CatGraphFilter filter(model, options.filter);
   LocalizationResult result;
   std::vector<std::size_t> sizes;

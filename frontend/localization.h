@@ -53,6 +53,17 @@ struct LocalizationOptions {
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;
 };
 
+// The words of every frame of the dataset, in frame order, extracted on
+// options.threads threads. Throws FileError for an image that cannot be read.
+std::vector<WordSet> ExtractWords(const Dataset& dataset, const Vocabulary& vocabulary,
+                                  const LocalizationOptions& options);
+
+// The filter over frames whose words are given (one set per frame), so that
+// several runs over the same data extract the features once.
+LocalizationResult Localize(const Dataset& dataset, const std::vector<WordSet>& words,
+                            const FabMapModel& model, const LocalizationOptions& options);
+
+// ExtractWords, then the filter with the vocabulary's Chow-Liu tree.
 LocalizationResult Localize(const Dataset& dataset, const Vocabulary& vocabulary,
                             const LocalizationOptions& options);
 

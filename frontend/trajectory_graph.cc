@@ -3,18 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <queue>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 
 namespace catgraph {
 
-int TrajectoryGraph::AddNode(int frame, double time_s, double path_length_m, WordSet words) {
+int TrajectoryGraph::AddNode(int frame, double time_s, double path_length_m, const Pose2& odometry_pose,
+                             WordSet words) {
   GraphNode node;
   node.frame = frame;
   node.time_s = time_s;
   node.path_length_m = path_length_m;
+  node.odometry_pose = odometry_pose;
   node.words = std::move(words);
   nodes_.push_back(std::move(node));
   return static_cast<int>(nodes_.size()) - 1;
@@ -33,64 +33,100 @@ int TrajectoryGraph::AddEdge(int from, int to, const Pose2& u, EdgeType type) {
   return id;
 }
 
-Pose2 LocalGraph::PointPose(const TrajectoryGraph& graph, int edge, double alpha) const {
-  // Along the segment between the two node poses, as the projection sees it
-  // (with loops, the end may have been reached by another path than e).
-  const GraphEdge& e = graph.edge(edge);
-  return Interpolate(pose.at(e.from), pose.at(e.to), alpha);
+const Pose2* LocalGraph::Find(int node) const {
+  const auto it = std::lower_bound(nodes.begin(), nodes.end(), node,
+                                   [](const Node& n, int id) { return n.id < id; });
+  return it != nodes.end() && it->id == node ? &it->pose : nullptr;
+}
+
+const Pose2& LocalGraph::PoseOf(int node) const {
+  const Pose2* pose = Find(node);
+  if (pose == nullptr) throw std::out_of_range("local graph: node " + std::to_string(node) + " not reached");
+  return *pose;
+}
+
+std::optional<Pose2> LocalGraph::PointPose(int edge, double alpha) const {
+  const auto it = std::lower_bound(segments.begin(), segments.end(), edge,
+                                   [](const Segment& s, int id) { return s.edge < id; });
+  if (it == segments.end() || it->edge != edge) return std::nullopt;
+  return Interpolate(it->from, it->to, alpha);
+}
+
+void LocalGraphBuilder::Build(const TrajectoryGraph& graph, int anchor, double radius_m,
+                              const std::function<bool(int)>& eligible, LocalGraph& out) {
+  out.nodes.clear();
+  out.segments.clear();
+  const std::size_t n_nodes = graph.nodes().size();
+  if (stamp_.size() < n_nodes) stamp_.resize(std::max(n_nodes, 2 * stamp_.size()), 0);
+  if (++current_ == 0) {  // wrapped: forget every old stamp
+    std::fill(stamp_.begin(), stamp_.end(), 0);
+    current_ = 1;
+  }
+  // Dijkstra on path length; a visited node carries the current stamp.
+  auto later = [](const Entry& a, const Entry& b) { return a.g > b.g; };
+  fringe_.clear();
+  fringe_.push_back({0.0, anchor, Pose2()});
+  while (!fringe_.empty()) {
+    std::pop_heap(fringe_.begin(), fringe_.end(), later);
+    const Entry top = fringe_.back();
+    fringe_.pop_back();
+    std::uint32_t& seen = stamp_[static_cast<std::size_t>(top.node)];
+    if (seen == current_) continue;  // the first arrival is the shortest
+    seen = current_;
+    out.nodes.push_back({top.node, top.pose});
+    for (const int id : graph.node(top.node).edges) {
+      const GraphEdge& e = graph.edge(id);
+      const int m = e.from == top.node ? e.to : e.from;
+      if (stamp_[static_cast<std::size_t>(m)] == current_ || (eligible && !eligible(m))) continue;
+      const Pose2 next = e.from == top.node ? top.pose * e.u : top.pose * e.u.Inverse();
+      if (next.translation().squaredNorm() > radius_m * radius_m) continue;
+      fringe_.push_back({top.g + e.length_m, m, next});
+      std::push_heap(fringe_.begin(), fringe_.end(), later);
+    }
+  }
+  std::sort(out.nodes.begin(), out.nodes.end(),
+            [](const LocalGraph::Node& a, const LocalGraph::Node& b) { return a.id < b.id; });
+  for (const LocalGraph::Node& n : out.nodes) {
+    for (const int id : graph.node(n.id).edges) {
+      const GraphEdge& e = graph.edge(id);
+      // Each edge once: from its start node.
+      if (e.from == n.id && stamp_[static_cast<std::size_t>(e.to)] == current_) {
+        out.segments.push_back({id, n.pose, out.PoseOf(e.to)});
+      }
+    }
+  }
+  std::sort(out.segments.begin(), out.segments.end(),
+            [](const LocalGraph::Segment& a, const LocalGraph::Segment& b) { return a.edge < b.edge; });
 }
 
 LocalGraph BuildLocalGraph(const TrajectoryGraph& graph, int anchor, double radius_m,
                            const std::function<bool(int)>& eligible) {
+  LocalGraphBuilder builder;
   LocalGraph local;
-  using Entry = std::tuple<double, int, Pose2>;  // path length, node, pose
-  auto later = [](const Entry& a, const Entry& b) { return std::get<0>(a) > std::get<0>(b); };
-  std::priority_queue<Entry, std::vector<Entry>, decltype(later)> fringe(later);
-  fringe.emplace(0.0, anchor, Pose2());
-  while (!fringe.empty()) {
-    const auto [g, n, pose] = fringe.top();
-    fringe.pop();
-    if (!local.pose.emplace(n, pose).second) continue;  // the first arrival is the shortest
-    for (const int id : graph.node(n).edges) {
-      const GraphEdge& e = graph.edge(id);
-      const int m = e.from == n ? e.to : e.from;
-      if (local.Contains(m) || (eligible && !eligible(m))) continue;
-      const Pose2 next = e.from == n ? pose * e.u : pose * e.u.Inverse();
-      if (next.translation().norm() > radius_m) continue;
-      fringe.emplace(g + e.length_m, m, next);
-    }
-  }
-  for (const auto& [n, pose] : local.pose) {
-    for (const int id : graph.node(n).edges) {
-      const GraphEdge& e = graph.edge(id);
-      // Each edge once: from its start node.
-      if (e.from == n && local.Contains(e.to)) local.edges.push_back(id);
-    }
-  }
-  std::sort(local.edges.begin(), local.edges.end());
+  builder.Build(graph, anchor, radius_m, eligible, local);
   return local;
 }
 
-std::optional<Projection> ProjectOntoLocalGraph(const TrajectoryGraph& graph, const LocalGraph& local,
-                                                const Pose2& y) {
+std::optional<Projection> ProjectOntoLocalGraph(const LocalGraph& local, const Pose2& y) {
   std::optional<Projection> best;
   const Eigen::Vector2d p = y.translation();
-  for (const int id : local.edges) {
-    const GraphEdge& e = graph.edge(id);
-    const Pose2& a = local.pose.at(e.from);
-    const Pose2& b = local.pose.at(e.to);
-    const Eigen::Vector2d ab = b.translation() - a.translation();
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (const LocalGraph::Segment& s : local.segments) {
+    const Eigen::Vector2d a = s.from.translation();
+    const Eigen::Vector2d ab = s.to.translation() - a;
     const double len2 = ab.squaredNorm();
     if (len2 < 1e-12) continue;
-    const double t = std::clamp((p - a.translation()).dot(ab) / len2, 0.0, 1.0);
-    const Eigen::Vector2d q = a.translation() + t * ab;
-    const double d = (p - q).norm();
-    if (!best || d < best->distance_m) {
+    const double t = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
+    const Eigen::Vector2d q = a + t * ab;
+    const double d2 = (p - q).squaredNorm();
+    if (d2 < best_d2) {
+      best_d2 = d2;
       // The path heading along a straight segment between the two node poses.
-      const double heading = a.theta() + t * WrapAngle(b.theta() - a.theta());
-      best = Projection{id, t, Pose2(q.x(), q.y(), heading), d};
+      const double heading = s.from.theta() + t * WrapAngle(s.to.theta() - s.from.theta());
+      best = Projection{s.edge, t, Pose2(q.x(), q.y(), heading), 0.0};
     }
   }
+  if (best) best->distance_m = std::sqrt(best_d2);
   return best;
 }
 

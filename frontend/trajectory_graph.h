@@ -15,7 +15,7 @@
 
 #include <functional>
 #include <optional>
-#include <unordered_map>
+#include <cstdint>
 #include <vector>
 
 #include "backend/graph/pose2.h"
@@ -29,6 +29,7 @@ struct GraphNode {
   int frame = -1;             // index in the dataset's frames.csv
   double time_s = 0.0;
   double path_length_m = 0.0;  // odometry distance from the first node
+  Pose2 odometry_pose;         // dead reckoning from the first node
   WordSet words;
   std::vector<int> edges;      // incident edges, both directions
 };
@@ -42,7 +43,7 @@ struct GraphEdge {
 
 class TrajectoryGraph {
  public:
-  int AddNode(int frame, double time_s, double path_length_m, WordSet words);
+  int AddNode(int frame, double time_s, double path_length_m, const Pose2& odometry_pose, WordSet words);
   // Throws std::invalid_argument on unknown nodes or a self-edge.
   int AddEdge(int from, int to, const Pose2& u, EdgeType type);
 
@@ -62,23 +63,55 @@ inline Pose2 PointOnEdge(const Pose2& u, double alpha) {
 }
 
 // A local graph: node poses in the frame of one anchor node, and the edges
-// whose both ends were reached.
+// whose both ends were reached. Flat arrays sorted by id: a local graph is
+// built for every occupied edge at every step, so no hashing.
 struct LocalGraph {
-  std::unordered_map<int, Pose2> pose;  // node id -> pose in the anchor's frame
-  std::vector<int> edges;               // edge ids with both endpoints in `pose`
+  struct Node {
+    int id;
+    Pose2 pose;  // in the anchor's frame
+  };
+  struct Segment {
+    int edge;
+    Pose2 from, to;  // the end nodes' poses
+  };
+  std::vector<Node> nodes;        // sorted by id
+  std::vector<Segment> segments;  // the edges with both ends reached, sorted by edge id
 
-  bool Contains(int node) const { return pose.count(node) != 0; }
-  // The pose of the point at alpha on edge e, in the anchor's frame; the
-  // edge must be in the local graph.
-  Pose2 PointPose(const TrajectoryGraph& graph, int edge, double alpha) const;
+  const Pose2* Find(int node) const;
+  bool Contains(int node) const { return Find(node) != nullptr; }
+  // Throws std::out_of_range when the node is not in the local graph.
+  const Pose2& PoseOf(int node) const;
+  // The pose of the point at alpha on edge e (between the two node poses,
+  // as the projection sees it: with loops, an end may have been reached by
+  // another path than e), or nullopt when e is not in the local graph.
+  std::optional<Pose2> PointPose(int edge, double alpha) const;
 };
 
-// Nodes within `radius_m` (straight-line, in the anchor's frame) of the
-// anchor node, reached along edges through eligible nodes, shortest path
-// first. `eligible` may be empty (every node eligible); the anchor is always
-// included.
+// Builds local graphs, reusing its buffers (a visited stamp per graph node),
+// so that a build costs O(nodes reached), not O(graph). Thread-compatible.
+class LocalGraphBuilder {
+ public:
+  // Nodes within `radius_m` (straight-line, in the anchor's frame) of the
+  // anchor node, reached along edges through eligible nodes, shortest path
+  // first. `eligible` may be empty (every node); the anchor is always
+  // included.
+  void Build(const TrajectoryGraph& graph, int anchor, double radius_m,
+             const std::function<bool(int)>& eligible, LocalGraph& out);
+
+ private:
+  struct Entry {
+    double g;
+    int node;
+    Pose2 pose;
+  };
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t current_ = 0;
+  std::vector<Entry> fringe_;
+};
+
+// One-off form of LocalGraphBuilder::Build.
 LocalGraph BuildLocalGraph(const TrajectoryGraph& graph, int anchor, double radius_m,
-                           const std::function<bool(int)>& eligible);
+                           const std::function<bool(int)>& eligible = {});
 
 // The nearest point of the local graph's edges to `y` (x, y only): edge,
 // fraction along it, path heading there, and the distance. Edges shorter
@@ -89,8 +122,7 @@ struct Projection {
   Pose2 pose;          // position on the edge, path heading θ_s
   double distance_m = 0.0;
 };
-std::optional<Projection> ProjectOntoLocalGraph(const TrajectoryGraph& graph, const LocalGraph& local,
-                                                const Pose2& y);
+std::optional<Projection> ProjectOntoLocalGraph(const LocalGraph& local, const Pose2& y);
 
 }  // namespace catgraph
 

@@ -304,6 +304,8 @@ Scenario ParseScenario(std::string_view yaml, const std::string& source,
   s.description = r.String("description", "");
   s.seed = r.Unsigned("seed", s.seed);
   s.floor_plan = ResolveWorld(r.Node("world"), source, base_dir);
+  // The same building redecorated: every wall texture drawn from another seed.
+  s.floor_plan.texture_seed = r.Unsigned("texture_seed", s.floor_plan.texture_seed);
   s.changed_pixel_fraction = r.Number("changed_pixel_fraction", s.changed_pixel_fraction, 1e-6, 1.0);
 
   if (r.Has("camera")) {

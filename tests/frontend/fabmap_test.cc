@@ -89,6 +89,19 @@ TEST_CASE("the mean-field new place uses the training marginals as generators", 
   CHECK(model.ForFrame({0}).LogNewPlaceLikelihood() == Approx(expected));
 }
 
+TEST_CASE("the sampled new place is the log-mean-exp of the likelihoods against the samples",
+          "[frontend][fabmap]") {
+  const std::vector<WordSet> samples = {{0}, {1}, {0, 1}};
+  FabMapOptions options;
+  options.new_place = NewPlaceModel::kSampled;
+  const FabMapModel model(LearnChowLiuTree(kTraining, 2), options, samples);
+  const WordSet z = {1};
+  double mean = 0.0;
+  for (const WordSet& s : samples) mean += std::exp(model.LogLikelihoodDirect(z, s)) / 3.0;
+  CHECK(model.ForFrame(z).LogNewPlaceLikelihood() == Approx(std::log(mean)));
+  CHECK_THROWS_AS(FabMapModel(LearnChowLiuTree(kTraining, 2), options), std::invalid_argument);  // no samples
+}
+
 TEST_CASE("the per-frame tables give the direct likelihood for any node", "[frontend][fabmap]") {
   std::mt19937_64 rng(7);
   const int v = 40;
