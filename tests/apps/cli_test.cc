@@ -259,7 +259,7 @@ TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plo
           "[apps][simulate]") {
   const Result list = Run({"simulate", "--list"});
   REQUIRE(list.status == 0);
-  CHECK(list.out == "office-static\noffice-change\noffice-split\noffice-lighting\n");
+  CHECK(list.out == "office-static\noffice-change\noffice-split\noffice-lighting\noffice-training\n");
   const Result print = Run({"simulate", "--print-scenario", "office-change"});
   REQUIRE(print.status == 0);
   CHECK(print.out.find("name: office-change") != std::string::npos);

@@ -28,12 +28,15 @@ constexpr const char* kMinimal =
 
 TEST_CASE("the built-in scenarios parse and agree with their documentation", "[simulation][scenario]") {
   const auto names = BuiltInScenarioNames();
-  REQUIRE(names == std::vector<std::string>{"office-static", "office-change", "office-split", "office-lighting"});
+  REQUIRE(names == std::vector<std::string>{"office-static", "office-change", "office-split", "office-lighting",
+                                            "office-training"});
   for (const auto& name : names) {
     INFO(name);
     const Scenario s = LoadScenario(name);
     CHECK(s.name == name);
-    CHECK(s.traversals.size() == 2);
+    CHECK(s.traversals.size() == (name == "office-training" ? 1u : 2u));
+    // The training world is the same building redecorated.
+    CHECK(s.floor_plan.texture_seed == (name == "office-training" ? 1001u : 7u));
     CHECK(s.floor_plan.building.x1 - s.floor_plan.building.x0 == 60.0);
     CHECK(s.floor_plan.building.y1 - s.floor_plan.building.y0 == 30.0);
     CHECK(s.camera.width_px == 261);
