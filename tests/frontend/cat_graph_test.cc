@@ -127,7 +127,7 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
 // forward camera in a corridor does. Nothing is ever revisited.
 TEST_CASE("The odometric gate keeps a first pass through an aliased corridor free of closures",
           "[frontend][catgraph]") {
-  constexpr double kStep = 0.05, kLength = 60.0;
+  constexpr double kStep = 0.05, kLength = 25.0;
   auto run = [&](bool gate, std::uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -146,7 +146,7 @@ TEST_CASE("The odometric gate keeps a first pass through an aliased corridor fre
     for (double s = 0.0; s < kLength; s += 0.25) training.push_back(observe(s));
     const FabMapModel model(LearnChowLiuTree(training, 4 * static_cast<int>(kLength / 0.5)), FabMapOptions{});
     CatGraphOptions options;
-    options.num_particles = 300;
+    options.num_particles = 200;
     options.new_place_log_offset = 0.0;
     options.odometric_gate = gate;
     options.seed = seed;
