@@ -64,34 +64,32 @@ bool CatGraphFilter::Eligible(int node) const {
 }
 
 void CatGraphFilter::SeedUniformly(std::size_t count, std::vector<Particle>& out) {
-  // Eligible, non-degenerate edges, drawn in proportion to their length. An
-  // edge's newer end is its largest node id, which never decreases with the
-  // edge id, so the edges older than the exclusion windows are a prefix;
-  // draws landing outside the odometric gate are drawn again.
+  if (count == 0) return;
+  // Eligible, non-degenerate edges, drawn in proportion to their length.
+  // An edge's newer end is its largest node id, which never decreases with
+  // the edge id, so the edges older than the exclusion windows are a prefix;
+  // within it one pass applies the odometric gate (a few ns per edge; the
+  // gate usually leaves too few edges for drawing and rejecting).
   const auto& edges = graph_.edges();
-  while (edge_length_sum_.size() < edges.size()) {
-    const double before = edge_length_sum_.empty() ? 0.0 : edge_length_sum_.back();
-    edge_length_sum_.push_back(before + edges[edge_length_sum_.size()].length_m);
+  const auto prefix = std::partition_point(edges.begin(), edges.end(), [this](const GraphEdge& e) {
+    return std::max(e.from, e.to) < eligible_below_;
+  });
+  seed_edges_.clear();
+  seed_cumulative_.clear();
+  double total = 0.0;
+  for (auto e = edges.begin(); e != prefix; ++e) {
+    if (e->length_m < 1e-6 || !Eligible(e->from) || !Eligible(e->to)) continue;
+    total += e->length_m;
+    seed_edges_.push_back(static_cast<int>(e - edges.begin()));
+    seed_cumulative_.push_back(total);
   }
-  const auto prefix = static_cast<std::size_t>(
-      std::partition_point(edges.begin(), edges.end(),
-                           [this](const GraphEdge& e) { return std::max(e.from, e.to) < eligible_below_; }) -
-      edges.begin());
-  if (prefix == 0 || edge_length_sum_[prefix - 1] <= 0.0) return;
+  if (seed_edges_.empty()) return;
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  constexpr int kMaxDraws = 64;  // per particle, before giving the particle up
   for (std::size_t i = 0; i < count; ++i) {
-    for (int attempt = 0; attempt < kMaxDraws; ++attempt) {
-      const double r = unit(rng_) * edge_length_sum_[prefix - 1];
-      const auto k = std::min(prefix - 1, static_cast<std::size_t>(
-                                              std::upper_bound(edge_length_sum_.begin(),
-                                                               edge_length_sum_.begin() + static_cast<long>(prefix), r) -
-                                              edge_length_sum_.begin()));
-      const GraphEdge& e = edges[k];
-      if (e.length_m < 1e-6 || !Eligible(e.from) || !Eligible(e.to)) continue;
-      out.push_back({static_cast<int>(k), unit(rng_), unit(rng_) < 0.5 ? 1 : -1, 0.0});
-      break;
-    }
+    const double r = unit(rng_) * total;
+    const auto k = static_cast<std::size_t>(
+        std::upper_bound(seed_cumulative_.begin(), seed_cumulative_.end(), r) - seed_cumulative_.begin());
+    out.push_back({seed_edges_[std::min(k, seed_edges_.size() - 1)], unit(rng_), unit(rng_) < 0.5 ? 1 : -1, 0.0});
   }
 }
 

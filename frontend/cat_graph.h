@@ -136,7 +136,8 @@ class CatGraphFilter {
   int eligible_below_ = 0;                 // this step's EligibleBelow()
   Pose2 odometry_pose_;                    // dead reckoning of the current frame
   std::function<bool(int)> eligible_;      // Eligible() for the builder
-  std::vector<double> edge_length_sum_;    // prefix sums of edge lengths, by edge id
+  std::vector<int> seed_edges_;            // scratch: edges to reseed on ...
+  std::vector<double> seed_cumulative_;    // ... and their cumulative length
   LocalGraphBuilder builder_;
   LocalGraph local_;                       // scratch
   std::vector<std::size_t> order_;         // scratch: particle indices by edge
