@@ -1,5 +1,7 @@
 // catgraph localize DATASET [--vocabulary V] -o OUT/ [--particles N] [--seed S]
+#include <array>
 #include <cmath>
+#include <map>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -8,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps/commands.h"
+#include "apps/plot/figure.h"
 #include "apps/progress_bar.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
@@ -20,7 +23,7 @@ namespace {
 
 struct LocalizeCommandOptions {
   std::string dataset, vocabulary, output;
-  int words = 500, train_every = 8, threads = 0;
+  int words = 500, train_every = 0, threads = 0;
   LocalizationOptions localization;
   bool quiet = false;
 };
@@ -30,9 +33,16 @@ struct LocalizeCommandOptions {
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out) {
   if (!o.vocabulary.empty()) return Vocabulary::Load(o.vocabulary);
   const int first = d.Traversals().front();
+  std::vector<std::size_t> frames;
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    if (d.frames[i].traversal == first) frames.push_back(i);
+  }
+  // Automatic: about 200 images, every frame of a short traversal.
+  const std::size_t every = o.train_every > 0 ? static_cast<std::size_t>(o.train_every)
+                                              : std::max<std::size_t>(1, frames.size() / 200);
   std::vector<cv::Mat> images;
-  for (std::size_t i = 0; i < d.frames.size(); i += static_cast<std::size_t>(o.train_every)) {
-    if (d.frames[i].traversal != first) continue;
+  for (std::size_t k = 0; k < frames.size(); k += every) {
+    const std::size_t i = frames[k];
     images.push_back(cv::imread(d.ImagePath(i).string(), cv::IMREAD_COLOR));
     if (images.back().empty()) throw FileError(d.ImagePath(i).string(), 0, "cannot decode the image");
   }
@@ -44,6 +54,57 @@ Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std:
   return v;
 }
 
+// The CAT-Graph+ paper's Figs. 7 and 8 for CAT-Graph alone: the best
+// hypothesis of every frame, and the error of every visual closure, against
+// the frame index, with the frames that see a changed region marked.
+plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold) {
+  plot::Figure figure;
+  figure.rows = 2;
+  figure.width_px = 1100;
+  figure.height_px = 800;
+  plot::Series changed{"frames seeing a changed region", {}, {}, plot::SeriesStyle::kSegments,
+                       {0.85, 0.55, 0.1, 0.9}, 4.0};
+  plot::Series hypothesis{"best hypothesis", {}, {}, plot::SeriesStyle::kLine, plot::PaletteColor(1), 0.8};
+  plot::Series closed{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
+  plot::Series error{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
+  plot::Series best_error{"best hypothesis (no closure)", {}, {}, plot::SeriesStyle::kMarkers,
+                          {0.6, 0.6, 0.6, 0.6}, 1.0};
+  for (const auto& h : r.frames) {
+    const double k = h.frame;
+    if (d.frames[static_cast<std::size_t>(h.frame)].changed) {
+      changed.x.insert(changed.x.end(), {k - 0.5, k + 0.5});
+      changed.y.insert(changed.y.end(), {-0.04, -0.04});
+    }
+    hypothesis.x.push_back(k);
+    hypothesis.y.push_back(h.best.value);
+    if (h.closure) {
+      closed.x.push_back(k);
+      closed.y.push_back(h.best.value);
+    }
+    if (std::isnan(h.error_m)) continue;
+    (h.closure ? error : best_error).x.push_back(k);
+    (h.closure ? error : best_error).y.push_back(h.error_m);
+  }
+  plot::Series t_h{"T_h", {0.0, static_cast<double>(r.frames.size())}, {threshold, threshold},
+                   plot::SeriesStyle::kLine, {0.3, 0.3, 0.3, 1.0}, 1.0, true};
+  plot::Axes top;
+  top.title = "Location hypothesis (Eq 4) per frame";
+  top.x_label = "frame";
+  top.y_label = "hypothesis";
+  top.y_min = -0.08;
+  top.y_max = 1.05;
+  top.series = {changed, hypothesis, t_h, closed};
+  plot::Axes bottom;
+  bottom.title = "Error against ground truth";
+  bottom.x_label = "frame";
+  bottom.y_label = "error (m)";
+  bottom.y_scale = plot::Scale::kSymlog;
+  changed.y.assign(changed.y.size(), 0.0);
+  bottom.series = {changed, best_error, error};
+  figure.axes = {top, bottom};
+  return figure;
+}
+
 std::string Number(double value, const char* format = "%.4f") {
   if (std::isnan(value)) return "";
   char buffer[32];
@@ -52,7 +113,7 @@ std::string Number(double value, const char* format = "%.4f") {
 }
 
 void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
-  if (o.train_every < 1) throw std::invalid_argument("--train-every: expected >= 1");
+  if (o.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
   const Dataset d = ReadDataset(o.dataset);
   const Vocabulary vocabulary = VocabularyFor(d, o, out);
   auto features = std::make_shared<ProgressBar>("frames: features");
@@ -92,6 +153,9 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
   }
   WriteFileAtomically(dir / "closures.json", [&](std::ostream& f) { f << closures.dump(1) << '\n'; });
   WriteG2oFile(AnyPoseGraph(r.graph), dir / "graph.g2o");
+  const plot::Figure figure = LocalizationFigure(d, r, o.localization.filter.closure_threshold);
+  plot::SaveFigure(figure, dir / "localization.png");
+  plot::SaveFigure(figure, dir / "localization.svg");
 
   double sum = 0.0, worst = 0.0;
   int with_error = 0;
@@ -108,6 +172,24 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
         << " m";
   }
   out << '\n';
+  // Per traversal: how many frames closed, inside and outside the regions
+  // that changed (when the dataset flags them).
+  std::map<int, std::array<int, 4>> counts;  // traversal -> frames, closed, changed frames, closed there
+  for (const auto& h : r.frames) {
+    auto& c = counts[h.traversal];
+    const bool changed = d.frames[static_cast<std::size_t>(h.frame)].changed;
+    c[changed ? 2 : 0] += 1;
+    c[changed ? 3 : 1] += h.closure ? 1 : 0;
+  }
+  for (const auto& [traversal, c] : counts) {
+    out << "traversal " << traversal << ": " << c[1] << " of " << c[0] << " frames closed"
+        << (c[2] > 0 ? " outside changed regions" : "") << " (" << Number(100.0 * c[1] / std::max(1, c[0]), "%.1f")
+        << " %)";
+    if (c[2] > 0) {
+      out << ", " << c[3] << " of " << c[2] << " inside (" << Number(100.0 * c[3] / c[2], "%.1f") << " %)";
+    }
+    out << '\n';
+  }
 }
 
 }  // namespace
@@ -118,20 +200,32 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   CLI::App* cmd = app.add_subcommand(
       "localize",
       "Appearance-based localisation with CAT-Graph: per-frame location hypotheses, visual loop "
-      "closures and the pose graph. In progress (issue #6): on corridor data it still makes "
-      "false closures; see docs/frontend.md.");
+      "closures and the pose graph (hypotheses.csv, closures.json, graph.g2o). Defaults and the "
+      "choices beyond the paper: docs/frontend.md.");
   cmd->alias("localise");
   cmd->add_option("dataset", o->dataset, "Dataset directory")->required();
   cmd->add_option("-o,--output", o->output, "Output directory")->required();
   cmd->add_option("--vocabulary", o->vocabulary,
                   "Vocabulary file (catgraph vocabulary train); default: train one on the first traversal");
   cmd->add_option("--words", o->words, "Words of the default vocabulary")->capture_default_str();
-  cmd->add_option("--train-every", o->train_every, "Default vocabulary: every N-th frame of the first traversal")
+  cmd->add_option("--train-every", o->train_every, "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
       ->capture_default_str();
   cmd->add_option("--particles", f.num_particles, "n_p")->capture_default_str();
   cmd->add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
   cmd->add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
-  cmd->add_option("--new-place-prior", f.new_place_prior, "p_new")->capture_default_str();
+  cmd->add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
+  cmd->add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
+      ->capture_default_str();
+  cmd->add_option("--new-place-offset", f.new_place_log_offset,
+                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
+      ->capture_default_str();
+  cmd->add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
+                "Let particles onto nodes that dead reckoning rules out");
+  cmd->add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();
+  cmd->add_option("--gate-fraction", f.odometric_gate_fraction, "Odometric gate: fraction of the path since the node")
+      ->capture_default_str();
+  cmd->add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
+                "The camera sees all round: particles facing either way use the nodes' words");
   cmd->add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)")->capture_default_str();
   cmd->add_option("--exclusion-m", f.exclusion_window_m, "Self-match exclusion window (m of path)")->capture_default_str();
   cmd->add_option("--seed", f.seed, "Filter seed")->capture_default_str();

@@ -34,6 +34,7 @@ void Validate(const CatGraphOptions& o) {
   if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
+  if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
   if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
   if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
@@ -228,6 +229,11 @@ LocationHypothesis CatGraphFilter::BestHypothesis() {
 
 CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, const WordSet& words) {
   const bool first = graph_.nodes().empty();
+  // After a gap in the frames (traversals recorded apart) the motion since
+  // the previous frame says nothing about where the particles went: they are
+  // seeded afresh and the motion terms are left out for this frame.
+  const bool restart = first || time_s - time_s_ > options_.sequence_break_s;
+  if (restart && !first) particles_.clear();
   time_s_ = time_s;
   if (!first) path_length_m_ += u.translation().norm();
   if (!first) odometry_pose_ = odometry_pose_ * u;
@@ -258,30 +264,31 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const double prior_new =
       mapped_mass_ * options_.leave_probability + (1.0 - mapped_mass_) * options_.new_place_prior;
   const double log_keep = std::log(1.0 - prior_new);
-  if (!first) MotionAndProjection(u);
+  if (!restart) MotionAndProjection(u);
   for (Particle& p : particles_) {
     if (p.log_weight == kNegInf) continue;
     const GraphEdge& e = graph_.edge(p.edge);
     // Direction +1 faces the way the nodes' camera faced (a node's frame is
     // the robot's pose). A forward camera facing the other way sees what the
-    // nodes never saw: to such a particle the frame is as likely as at a new
-    // place [D, docs/frontend.md].
-    const bool reversed = options_.forward_camera && p.direction < 0;
+    // nodes never saw: such a particle has no appearance to be weighed by,
+    // and is dropped [D, docs/frontend.md].
+    if (options_.forward_camera && p.direction < 0) {
+      p.log_weight = kNegInf;
+      continue;
+    }
     const double log_observation =
-        reversed ? likelihood.LogNewPlaceLikelihood()
-                 : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
-                             p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
+        LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
+                  p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
     p.log_weight += log_observation + log_keep;
   }
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
-  if (!first) {
+  double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
+  if (!restart) {
     u_sum_ += u.ToVector();
     ++u_count_;
+    const Eigen::Vector3d du = (u.ToVector() - u_sum_ / u_count_).cwiseQuotient(options_.motion_sigma);
+    log_new -= 0.5 * du.squaredNorm();
   }
-  const Eigen::Vector3d u_mean = u_count_ > 0 ? Eigen::Vector3d(u_sum_ / u_count_) : Eigen::Vector3d::Zero();
-  const Eigen::Vector3d du = (u.ToVector() - u_mean).cwiseQuotient(options_.motion_sigma);
-  const double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset -
-                         0.5 * du.squaredNorm();
   double log_total = log_new;
   for (const Particle& p : particles_) log_total = LogSumExp(log_total, p.log_weight);
   for (Particle& p : particles_) p.log_weight -= log_total;

@@ -60,6 +60,9 @@ struct CatGraphOptions {
   bool odometric_gate = true;
   double odometric_gate_base_m = 1.0;      // >= 0
   double odometric_gate_fraction = 0.1;    // of the path since the node; >= 0
+  // A gap between frames longer than this restarts the particles (the
+  // traversals of a dataset recorded apart); > 0.
+  double sequence_break_s = 5.0;
   double motion_radius_m = 0.5;            // local-graph radius for the motion update (> one
                                            // frame's step + 3σ); > 0
   int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1

@@ -10,6 +10,7 @@
 
 #include "apps/commands.h"
 #include "apps/sweep.h"
+#include "backend/io/dataset.h"
 #include "tests/test_support.h"
 
 namespace catgraph {
@@ -282,6 +283,45 @@ TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plo
   CHECK(bad.err.find("mine.yaml:") != std::string::npos);
   CHECK(bad.err.find("unknown key 'extra_key'") != std::string::npos);
   std::filesystem::remove_all(dir);
+}
+
+// Issue #6's acceptance on office-change, end to end with the defaults: the
+// vocabulary trained on traversal 1, CAT-Graph over both traversals.
+TEST_CASE("localize on office-change: closures outside the changed region, none wrong, rare inside",
+          "[apps][localize][slow]") {
+  const auto dir = testing::TempDir("localize_office_change");
+  REQUIRE(Run({"simulate", "--scenario", "office-change", "-o", (dir / "data").string(), "--quiet"}).status == 0);
+  const Result r = Run({"localize", (dir / "data").string(), "-o", (dir / "out").string(), "--quiet"});
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  const Dataset d = ReadDataset(dir / "data");
+  std::ifstream in(dir / "out" / "closures.json");
+  const auto closures = nlohmann::json::parse(in);
+  std::vector<bool> closed(d.frames.size(), false);
+  double sum = 0.0, worst = 0.0;
+  for (const auto& c : closures) {
+    for (const char* key : {"id", "frame", "matched_frame", "kind", "hypothesis", "error_m"}) CHECK(c.contains(key));
+    CHECK(c.at("kind") == "visual");
+    CHECK(c.at("hypothesis").get<double>() > 0.8);
+    const double e = c.at("error_m").get<double>();
+    sum += e;
+    worst = std::max(worst, e);
+    closed.at(c.at("frame").get<std::size_t>()) = true;
+  }
+  int outside = 0, outside_closed = 0, inside = 0, inside_closed = 0;
+  for (std::size_t k = 0; k < d.frames.size(); ++k) {
+    if (d.frames[k].traversal != 2) continue;
+    (d.frames[k].changed ? inside : outside) += 1;
+    (d.frames[k].changed ? inside_closed : outside_closed) += closed[k] ? 1 : 0;
+  }
+  REQUIRE(!closures.empty());
+  CHECK(outside_closed >= 0.6 * outside);
+  CHECK(inside_closed <= 0.1 * inside);  // the paper's Fig. 7: rare where the place changed
+  CHECK(worst <= 1.0);
+  CHECK(sum / static_cast<double>(closures.size()) <= 0.25);
+  CHECK(std::filesystem::exists(dir / "out" / "hypotheses.csv"));
+  CHECK(std::filesystem::exists(dir / "out" / "graph.g2o"));
+  CHECK(std::filesystem::exists(dir / "out" / "localization.png"));
 }
 
 }  // namespace

@@ -121,6 +121,32 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
   CHECK(worst_error <= 1.0);
 }
 
+TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",
+          "[frontend][catgraph]") {
+  RingWorld world;
+  std::vector<WordSet> training;
+  for (double s = 0.0; s < RingWorld::kCircumference; s += 0.1) training.push_back(world.Observe(s));
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
+  auto new_place_after_gap = [&](double sequence_break_s) {
+    CatGraphOptions options;
+    options.num_particles = 200;
+    options.new_place_log_offset = 0.0;
+    options.sequence_break_s = sequence_break_s;
+    CatGraphFilter filter(model, options);
+    const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+    for (int k = 0; k < per_lap; ++k) {
+      filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep));
+    }
+    // 100 s later, somewhere that sees none of the ring's words: the
+    // odometry across the gap is one large, untypical increment.
+    const CatGraphStep after = filter.Step(per_lap, 0.25 * per_lap + 100.0, Pose2(0.3, 0.2, 2.0), WordSet{});
+    return after.new_place_probability;
+  };
+  // Eq 6's odometry term would rule the new place out (a 40-sigma increment).
+  CHECK(new_place_after_gap(1e9) < 1e-6);
+  CHECK(new_place_after_gap(5.0) > 1e-3);
+}
+
 // A straight corridor driven once: each 0.5 m has its own 4 words (80 %),
 // and the view ahead — the words of the next 10 m — is seen too, fading with
 // distance, so every place shares words with the places behind it, as a
