@@ -270,15 +270,14 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     const GraphEdge& e = graph_.edge(p.edge);
     // Direction +1 faces the way the nodes' camera faced (a node's frame is
     // the robot's pose). A forward camera facing the other way sees what the
-    // nodes never saw: such a particle has no appearance to be weighed by,
-    // and is dropped [D, docs/frontend.md].
-    if (options_.forward_camera && p.direction < 0) {
-      p.log_weight = kNegInf;
-      continue;
-    }
+    // nodes never saw: such a particle is weighed as an unremarkable place,
+    // by FAB-MAP's mean field (without the new-place offset)
+    // [D, docs/frontend.md].
+    const bool reversed = options_.forward_camera && p.direction < 0;
     const double log_observation =
-        LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
-                  p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
+        reversed ? likelihood.LogNewPlaceLikelihood()
+                 : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
+                             p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
     p.log_weight += log_observation + log_keep;
   }
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
