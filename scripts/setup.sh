@@ -80,8 +80,11 @@ case "$mode" in
     "$catgraph" simulate --scenario office-change -o "$out/office-change" --quiet
     "$catgraph" plot-dataset "$out/office-change" -o "$out/office-change-plan.png" \
       --pair-at 16,1.3 --pair-output "$out/office-change-before-after.png"
+    # CAT-Graph on it: visual loop closures, none where the furniture moved.
+    "$catgraph" localize "$out/office-change" -o "$out/localize" --quiet
     echo "setup: the demo's files are in $out (corrected.svg shows the map and its closures;"
-    echo "       office-change/ is the simulated dataset, office-change-plan.png its floor plan)"
+    echo "       office-change/ is the simulated dataset, office-change-plan.png its floor plan,"
+    echo "       localize/localization.png CAT-Graph's hypothesis and closure error per frame)"
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
