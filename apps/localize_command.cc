@@ -132,12 +132,12 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
   if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
   WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
     f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
-         "matched_frame,error_m\n";
+         "matched_frame,error_m,inference_pending\n";
     for (const auto& h : r.frames) {
       f << h.frame << ',' << h.traversal << ',' << h.edge_from_frame << ',' << h.edge_to_frame << ','
         << Number(h.best.alpha) << ',' << h.best.direction << ',' << Number(h.best.value) << ','
         << Number(h.new_place_probability) << ',' << (h.closure ? 1 : 0) << ',' << h.matched_frame << ','
-        << Number(h.error_m) << '\n';
+        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << '\n';
     }
   });
   nlohmann::ordered_json closures = nlohmann::ordered_json::array();
@@ -145,50 +145,82 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
     nlohmann::ordered_json j{{"id", c.id},
                              {"frame", c.frame},
                              {"matched_frame", c.matched_frame},
-                             {"kind", "visual"},
+                             {"kind", c.kind == ClosureKind::kVisual ? "visual" : "inferred"},
                              {"hypothesis", c.hypothesis},
                              {"relative_pose", {c.T_frame_matched.x(), c.T_frame_matched.y(), c.T_frame_matched.theta()}}};
     j["error_m"] = std::isnan(c.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(c.error_m);
+    if (c.kind == ClosureKind::kOdometryInferred) j["parents"] = c.parents;
     closures.push_back(j);
   }
+  nlohmann::ordered_json discarded = nlohmann::ordered_json::array();
+  for (const auto& x : r.discarded_inferences) {
+    nlohmann::ordered_json j{{"frame", x.frame},
+                             {"matched_frame", x.matched_frame},
+                             {"reference_closure", x.reference_closure},
+                             {"validating_closure", x.validating_closure}};
+    j["error_m"] = std::isnan(x.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(x.error_m);
+    discarded.push_back(j);
+  }
+  WriteFileAtomically(dir / "discarded_inferences.json", [&](std::ostream& f) { f << discarded.dump(1) << '\n'; });
   WriteFileAtomically(dir / "closures.json", [&](std::ostream& f) { f << closures.dump(1) << '\n'; });
   WriteG2oFile(AnyPoseGraph(r.graph), dir / "graph.g2o");
   const plot::Figure figure = LocalizationFigure(d, r, o.localization.filter.closure_threshold);
   plot::SaveFigure(figure, dir / "localization.png");
   plot::SaveFigure(figure, dir / "localization.svg");
 
-  double sum = 0.0, worst = 0.0;
-  int with_error = 0;
-  for (const auto& c : r.closures) {
-    if (std::isnan(c.error_m)) continue;
-    sum += c.error_m;
-    worst = std::max(worst, c.error_m);
-    ++with_error;
-  }
-  out << "wrote " << o.output << ": " << r.frames.size() << " frames, " << r.closures.size()
-      << " visual closures (median " << r.words_per_frame_median << " words per frame)";
-  if (with_error > 0) {
-    out << "; closure error mean " << Number(sum / with_error, "%.3f") << " m, max " << Number(worst, "%.3f")
-        << " m";
-  }
-  out << '\n';
-  // Per traversal: how many frames closed, inside and outside the regions
-  // that changed (when the dataset flags them).
-  std::map<int, std::array<int, 4>> counts;  // traversal -> frames, closed, changed frames, closed there
-  for (const auto& h : r.frames) {
-    auto& c = counts[h.traversal];
-    const bool changed = d.frames[static_cast<std::size_t>(h.frame)].changed;
-    c[changed ? 2 : 0] += 1;
-    c[changed ? 3 : 1] += h.closure ? 1 : 0;
-  }
-  for (const auto& [traversal, c] : counts) {
-    out << "traversal " << traversal << ": " << c[1] << " of " << c[0] << " frames closed"
-        << (c[2] > 0 ? " outside changed regions" : "") << " (" << Number(100.0 * c[1] / std::max(1, c[0]), "%.1f")
-        << " %)";
-    if (c[2] > 0) {
-      out << ", " << c[3] << " of " << c[2] << " inside (" << Number(100.0 * c[3] / c[2], "%.1f") << " %)";
+  out << "wrote " << o.output << ": " << r.frames.size() << " frames (median " << r.words_per_frame_median
+      << " words per frame)\n";
+  std::vector<bool> inferred_at(d.frames.size(), false);
+  for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
+    double sum = 0.0, worst = 0.0;
+    int count = 0, with_error = 0;
+    for (const auto& c : r.closures) {
+      if (c.kind != kind) continue;
+      ++count;
+      if (kind == ClosureKind::kOdometryInferred) inferred_at[static_cast<std::size_t>(c.frame)] = true;
+      if (std::isnan(c.error_m)) continue;
+      sum += c.error_m;
+      worst = std::max(worst, c.error_m);
+      ++with_error;
+    }
+    out << count << (kind == ClosureKind::kVisual ? " visual closures" : " odometry-inferred closures");
+    if (with_error > 0) {
+      out << ", error mean " << Number(sum / with_error, "%.3f") << " m, max " << Number(worst, "%.3f") << " m";
     }
     out << '\n';
+  }
+  if (o.localization.filter.odometric_inference) {
+    out << r.discarded_inferences.size() << " inferences discarded by total-path validation\n";
+  }
+  // Per traversal: how many frames closed, inside and outside the regions
+  // that changed (when the dataset flags them).
+  struct Counts {
+    int frames = 0, visual = 0, inferred = 0;
+  };
+  std::map<int, std::array<Counts, 2>> counts;  // traversal -> outside, inside changed regions
+  for (const auto& h : r.frames) {
+    const auto k = static_cast<std::size_t>(h.frame);
+    Counts& c = counts[h.traversal][d.frames[k].changed ? 1 : 0];
+    ++c.frames;
+    c.visual += h.closure ? 1 : 0;
+    c.inferred += inferred_at[k] ? 1 : 0;
+  }
+  auto describe = [&](const Counts& c) {
+    std::string text = std::to_string(c.visual) + " of " + std::to_string(c.frames) + " frames closed visually (" +
+                       Number(100.0 * c.visual / std::max(1, c.frames), "%.1f") + " %)";
+    if (o.localization.filter.odometric_inference) {
+      text += ", " + std::to_string(c.inferred) + " by inference (" +
+              Number(100.0 * c.inferred / std::max(1, c.frames), "%.1f") + " %)";
+    }
+    return text;
+  };
+  for (const auto& [traversal, c] : counts) {
+    out << "traversal " << traversal << ": ";
+    if (c[1].frames == 0) {
+      out << describe(c[0]) << '\n';
+    } else {
+      out << "outside changed regions " << describe(c[0]) << "; inside " << describe(c[1]) << '\n';
+    }
   }
 }
 
@@ -224,6 +256,10 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();
   cmd->add_option("--gate-fraction", f.odometric_gate_fraction, "Odometric gate: fraction of the path since the node")
       ->capture_default_str();
+  cmd->add_flag("--no-odometric-inference", [&f](std::int64_t) { f.odometric_inference = false; },
+                "CAT-Graph alone: no odometry-inferred closures (CAT-Graph+ is the default)");
+  cmd->add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
+  cmd->add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
   cmd->add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
                 "The camera sees all round: particles facing either way use the nodes' words");
   cmd->add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)")->capture_default_str();

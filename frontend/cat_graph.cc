@@ -7,6 +7,8 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 
 namespace catgraph {
 namespace {
@@ -18,6 +20,35 @@ double LogSumExp(double a, double b) {
   if (b == kNegInf) return a;
   const double m = std::max(a, b);
   return m + std::log(std::exp(a - m) + std::exp(b - m));
+}
+
+// Systematic resampling of n draws over the particles' weights (which may sum
+// to less than 1); draws past the last particle are counted in *beyond.
+std::vector<Particle> SystematicResample(const std::vector<Particle>& particles, int n, std::mt19937_64& rng,
+                                         std::size_t* beyond) {
+  std::vector<Particle> next;
+  next.reserve(static_cast<std::size_t>(n));
+  *beyond = 0;
+  if (particles.empty()) {
+    *beyond = static_cast<std::size_t>(n);
+    return next;
+  }
+  const double spacing = 1.0 / n;
+  double u0 = std::uniform_real_distribution<double>(0.0, spacing)(rng);
+  double cumulative = 0.0;
+  std::size_t i = 0;
+  for (int k = 0; k < n; ++k, u0 += spacing) {
+    while (i < particles.size() && cumulative + std::exp(particles[i].log_weight) < u0) {
+      cumulative += std::exp(particles[i].log_weight);
+      ++i;
+    }
+    if (i < particles.size()) {
+      next.push_back(particles[i]);
+    } else {
+      ++*beyond;
+    }
+  }
+  return next;
 }
 
 }  // namespace
@@ -35,12 +66,17 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
+  if (!(o.local_validation_m > 0.0 && o.total_validation_m > 0.0)) fail("d_loc and d_tot must be > 0");
   if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
   if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
 
 CatGraphFilter::CatGraphFilter(const FabMapModel& model, CatGraphOptions options)
-    : model_(model), options_(options), rng_(options.seed), eligible_([this](int n) { return Eligible(n); }) {
+    : model_(model),
+      options_(options),
+      rng_(options.seed),
+      eligible_([this](int n) { return Eligible(n); }),
+      odometric_rng_(options.seed ^ 0x9E3779B97F4A7C15ULL) {
   Validate(options_);
 }
 
@@ -94,18 +130,18 @@ void CatGraphFilter::SeedUniformly(std::size_t count, std::vector<Particle>& out
   }
 }
 
-void CatGraphFilter::MotionAndProjection(const Pose2& u) {
+void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const Pose2& u, std::mt19937_64& rng) {
   // Particles in order of their edge's start node, so that each local graph
   // is built once per step.
-  order_.resize(particles_.size());
+  order_.resize(particles.size());
   for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
-  auto anchor = [this](std::size_t i) { return graph_.edge(particles_[i].edge).from; };
+  auto anchor = [&](std::size_t i) { return graph_.edge(particles[i].edge).from; };
   std::stable_sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return anchor(a) < anchor(b); });
   const Eigen::Vector3d& s = options_.motion_sigma;
   std::normal_distribution<double> normal(0.0, 1.0);
   int built = -1;
   for (const std::size_t i : order_) {
-    Particle& p = particles_[i];
+    Particle& p = particles[i];
     const GraphEdge& e = graph_.edge(p.edge);
     if (e.from != built) {
       builder_.Build(graph_, e.from, options_.motion_radius_m + e.length_m, eligible_, local_);
@@ -117,7 +153,7 @@ void CatGraphFilter::MotionAndProjection(const Pose2& u) {
       continue;
     }
     const Pose2 x = p.direction < 0 ? *start * Pose2(0.0, 0.0, std::numbers::pi) : *start;
-    const Pose2 noisy(u.x() + s[0] * normal(rng_), u.y() + s[1] * normal(rng_), u.theta() + s[2] * normal(rng_));
+    const Pose2 noisy(u.x() + s[0] * normal(rng), u.y() + s[1] * normal(rng), u.theta() + s[2] * normal(rng));
     const Pose2 y = x * noisy;
     const auto projection = ProjectOntoLocalGraph(local_, y);
     if (!projection) {
@@ -140,16 +176,16 @@ void CatGraphFilter::MotionAndProjection(const Pose2& u) {
   }
 }
 
-LocationHypothesis CatGraphFilter::BestHypothesis() {
+LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& particles) {
   LocationHypothesis best;
   // Particles grouped by edge, with each edge's total weight.
   order_.clear();
-  for (std::size_t i = 0; i < particles_.size(); ++i) {
-    if (particles_[i].log_weight > kNegInf) order_.push_back(i);
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].log_weight > kNegInf) order_.push_back(i);
   }
   if (order_.empty()) return best;
   std::stable_sort(order_.begin(), order_.end(),
-                   [this](std::size_t a, std::size_t b) { return particles_[a].edge < particles_[b].edge; });
+                   [&](std::size_t a, std::size_t b) { return particles[a].edge < particles[b].edge; });
   struct EdgeGroup {
     int edge;
     std::size_t begin, end;  // range in order_
@@ -157,7 +193,7 @@ LocationHypothesis CatGraphFilter::BestHypothesis() {
   };
   std::vector<EdgeGroup> groups;
   for (std::size_t k = 0; k < order_.size(); ++k) {
-    const Particle& p = particles_[order_[k]];
+    const Particle& p = particles[order_[k]];
     if (groups.empty() || groups.back().edge != p.edge) groups.push_back({p.edge, k, k, 0.0});
     groups.back().end = k + 1;
     groups.back().weight += std::exp(p.log_weight);
@@ -188,9 +224,9 @@ LocationHypothesis CatGraphFilter::BestHypothesis() {
     bins.clear();
     for (std::size_t q = g->begin; q < g->end; ++q) {
       const std::size_t i = order_[q];
-      const int bin = static_cast<int>(particles_[i].alpha * e.length_m / 0.1);
+      const int bin = static_cast<int>(particles[i].alpha * e.length_m / 0.1);
       auto [it, inserted] = bins.try_emplace(bin, i);
-      if (!inserted && particles_[i].log_weight > particles_[it->second].log_weight) it->second = i;
+      if (!inserted && particles[i].log_weight > particles[it->second].log_weight) it->second = i;
     }
     // Every particle that can lie within r of a point of this edge; only
     // eligible nodes, so that the location never lands on a recent node
@@ -201,12 +237,12 @@ LocationHypothesis CatGraphFilter::BestHypothesis() {
       const EdgeGroup* other = group_of(s.edge);
       if (other == nullptr) continue;
       for (std::size_t q = other->begin; q < other->end; ++q) {
-        const Particle& p = particles_[order_[q]];
+        const Particle& p = particles[order_[q]];
         nearby.emplace_back(Interpolate(s.from, s.to, p.alpha).translation(), std::exp(p.log_weight));
       }
     }
     for (const auto& [bin, i] : bins) {
-      const Eigen::Vector2d c = local_.PointPose(g->edge, particles_[i].alpha)->translation();
+      const Eigen::Vector2d c = local_.PointPose(g->edge, particles[i].alpha)->translation();
       double sum = 0.0;
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
       for (const auto& [q, w] : nearby) {
@@ -217,7 +253,7 @@ LocationHypothesis CatGraphFilter::BestHypothesis() {
       // the argmax alone can sit up to d_h off; the location reported is the
       // weighted mean of the particles in the winning disc, projected back
       // onto the graph [D, docs/frontend.md].
-      best = {g->edge, particles_[i].alpha, particles_[i].direction, sum};
+      best = {g->edge, particles[i].alpha, particles[i].direction, sum};
       if (const auto p = ProjectOntoLocalGraph(local_, Pose2(mean.x() / sum, mean.y() / sum, 0.0))) {
         best.edge = p->edge;
         best.alpha = p->alpha;
@@ -264,7 +300,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const double prior_new =
       mapped_mass_ * options_.leave_probability + (1.0 - mapped_mass_) * options_.new_place_prior;
   const double log_keep = std::log(1.0 - prior_new);
-  if (!restart) MotionAndProjection(u);
+  if (!restart) MotionAndProjection(particles_, u, rng_);
   for (Particle& p : particles_) {
     if (p.log_weight == kNegInf) continue;
     const GraphEdge& e = graph_.edge(p.edge);
@@ -295,18 +331,13 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   mapped_mass_ = particles_.empty() ? 0.0 : 1.0 - step.new_place_probability;
 
   // Location hypothesis and loop closure (Eq 4).
-  step.best = BestHypothesis();
+  step.best = BestHypothesis(particles_);
   const int previous = first ? -1 : static_cast<int>(graph_.nodes().size()) - 1;
   step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, words);
   if (previous >= 0) graph_.AddEdge(previous, step.node, u, EdgeType::kOdometry);
   if (step.best.edge >= 0 && step.best.value > options_.closure_threshold) {
-    const GraphEdge& e = graph_.edge(step.best.edge);
-    builder_.Build(graph_, e.from, e.length_m + 1e-6, {}, local_);
-    Pose2 x = *local_.PointPose(step.best.edge, step.best.alpha);
-    if (step.best.direction < 0) x = x * Pose2(0.0, 0.0, std::numbers::pi);
     step.closure = true;
-    step.matched_node = step.best.alpha < 0.5 ? e.from : e.to;
-    step.T_node_matched = x.Between(local_.PoseOf(step.matched_node));
+    std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);
     step.loop_edge = graph_.AddEdge(step.node, step.matched_node, step.T_node_matched, EdgeType::kVisualLoop);
   }
 
@@ -320,25 +351,10 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const double n = static_cast<double>(options_.num_particles);
   const double ess = sum > 0.0 ? sum * sum / sum_sq : 0.0;
   if (particles_.empty() || ess / n < options_.ess_threshold) {
-    std::vector<Particle> next;
-    next.reserve(particles_.size());
-    std::size_t new_places = 0;
-    if (!particles_.empty()) {
-      const double spacing = 1.0 / n;
-      double u0 = std::uniform_real_distribution<double>(0.0, spacing)(rng_);
-      double cumulative = 0.0;
-      std::size_t i = 0;
-      for (int k = 0; k < options_.num_particles; ++k, u0 += spacing) {
-        while (i < particles_.size() && cumulative + std::exp(particles_[i].log_weight) < u0) {
-          cumulative += std::exp(particles_[i].log_weight);
-          ++i;
-        }
-        if (i < particles_.size()) next.push_back(particles_[i]);
-        else ++new_places;
-      }
-    } else {
-      new_places = static_cast<std::size_t>(options_.num_particles);
-    }
+    // Draws beyond the particles' mass are new-place draws (weights are
+    // normalised jointly with the new place).
+    std::size_t new_places = static_cast<std::size_t>(options_.num_particles);
+    std::vector<Particle> next = SystematicResample(particles_, options_.num_particles, rng_, &new_places);
     SeedUniformly(new_places, next);
     for (Particle& p : next) p.log_weight = -std::log(static_cast<double>(next.size()));
     particles_ = std::move(next);
@@ -346,7 +362,92 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   } else {
     for (Particle& p : particles_) p.log_weight -= std::log(sum);  // normalised among particles
   }
+  if (options_.odometric_inference) OdometricStep(restart ? Pose2() : u, step);
   return step;
+}
+
+std::optional<Pose2> CatGraphFilter::HypothesisPose(const LocationHypothesis& h) const {
+  const std::optional<Pose2> x = local_.PointPose(h.edge, h.alpha);
+  if (!x || h.direction > 0) return x;
+  return *x * Pose2(0.0, 0.0, std::numbers::pi);
+}
+
+std::pair<int, Pose2> CatGraphFilter::LoopTo(const LocationHypothesis& h) {
+  const GraphEdge& e = graph_.edge(h.edge);
+  builder_.Build(graph_, e.from, e.length_m + 1e-6, {}, local_);
+  const int matched = h.alpha < 0.5 ? e.from : e.to;
+  return {matched, HypothesisPose(h)->Between(local_.PoseOf(matched))};
+}
+
+void CatGraphFilter::OdometricStep(const Pose2& u, CatGraphStep& step) {
+  if (step.closure) {
+    // Total-path validation (§3.4): the odometric hypothesis against the
+    // visual match, in a local graph around the match.
+    if (reference_node_ >= 0 && !pending_.empty()) {
+      const LocationHypothesis odometric = BestHypothesis(odometric_);
+      double distance = std::numeric_limits<double>::infinity();
+      if (odometric.edge >= 0) {
+        const GraphEdge& e = graph_.edge(step.best.edge);
+        builder_.Build(graph_, e.from, options_.total_validation_m + e.length_m + 1e-6, eligible_, local_);
+        const auto a = local_.PointPose(step.best.edge, step.best.alpha);
+        const auto b = local_.PointPose(odometric.edge, odometric.alpha);
+        if (a && b) distance = (a->translation() - b->translation()).norm();
+      }
+      step.reference_node = reference_node_;
+      (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
+    }
+    // Re-initialisation (§3.5).
+    odometric_ = particles_;
+    reference_node_ = step.node;
+    reference_location_ = step.best;
+    T_since_reference_ = Pose2();
+    pending_.clear();
+    return;
+  }
+  if (reference_node_ < 0) return;  // no visual closure yet: nothing to infer from
+
+  // The odometric filter: same motion and projection, position-only weights
+  // (Eq 8), resampled without new places.
+  MotionAndProjection(odometric_, u, odometric_rng_);
+  double log_total = kNegInf;
+  for (const Particle& p : odometric_) log_total = LogSumExp(log_total, p.log_weight);
+  if (log_total == kNegInf) {  // every particle left the graph: nothing to infer until the next closure
+    odometric_.clear();
+    reference_node_ = -1;
+    pending_.clear();
+    return;
+  }
+  double sum_sq = 0.0;
+  for (Particle& p : odometric_) {
+    p.log_weight -= log_total;
+    sum_sq += std::exp(2.0 * p.log_weight);
+  }
+  if (1.0 / sum_sq < options_.ess_threshold * static_cast<double>(odometric_.size())) {
+    std::size_t beyond = 0;
+    odometric_ = SystematicResample(odometric_, static_cast<int>(odometric_.size()), odometric_rng_, &beyond);
+    for (Particle& p : odometric_) p.log_weight = -std::log(static_cast<double>(odometric_.size()));
+  }
+  T_since_reference_ = T_since_reference_ * u;
+  step.odometric_best = BestHypothesis(odometric_);
+  if (step.odometric_best.edge < 0) return;
+
+  // Local validation (§3.3, Eq 9-11): the odometric hypothesis' pose
+  // relative to the last visual match, along the old graph's shortest path,
+  // against the odometry since then.
+  const GraphEdge& e = graph_.edge(reference_location_.edge);
+  const double radius = T_since_reference_.translation().norm() + options_.local_validation_m + e.length_m;
+  builder_.Build(graph_, e.from, radius, eligible_, local_);
+  const auto from = HypothesisPose(reference_location_);
+  const auto to = HypothesisPose(step.odometric_best);
+  if (!from || !to) return;
+  const Pose2 y = from->Between(*to);
+  if ((y.translation() - T_since_reference_.translation()).norm() >= options_.local_validation_m) return;
+  step.inference_pending = true;
+  InferredClosure c;
+  c.node = step.node;
+  c.location = step.odometric_best;
+  std::tie(c.matched_node, c.T_node_matched) = LoopTo(step.odometric_best);
+  pending_.push_back(c);
 }
 
 }  // namespace catgraph

@@ -71,6 +71,12 @@ struct CatGraphOptions {
   // nodes'; false for a panoramic camera (spec Eq 2 as written).
   bool forward_camera = true;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
+
+  // CAT-Graph+ (spec §3; the paper's Table II): an odometry-only particle
+  // filter beside the visual one infers closures between visual closures.
+  bool odometric_inference = true;
+  double local_validation_m = 2.0;         // d_loc; > 0
+  double total_validation_m = 1.0;         // d_tot; > 0
   std::uint64_t seed = 1;
 };
 
@@ -91,6 +97,15 @@ struct LocationHypothesis {
   double value = 0.0;    // Eq 4: weight within d_h
 };
 
+// An odometry-inferred closure (CAT-Graph+): frame node `node` is at
+// `location` on the old trajectory.
+struct InferredClosure {
+  int node = -1;
+  LocationHypothesis location;     // the odometric filter's best hypothesis then
+  int matched_node = -1;           // the nearer end of the matched edge
+  Pose2 T_node_matched;
+};
+
 struct CatGraphStep {
   int node = -1;                   // the node added for this frame
   LocationHypothesis best;
@@ -100,6 +115,18 @@ struct CatGraphStep {
   Pose2 T_node_matched;            // matched node in the frame of the new node
   int loop_edge = -1;              // the visual-loop edge added to the graph
   bool resampled = false;
+
+  // CAT-Graph+. Between visual closures: the odometric filter's best
+  // hypothesis and whether this frame passed local validation (d_loc) and
+  // waits for the next visual closure.
+  LocationHypothesis odometric_best;
+  bool inference_pending = false;
+  // At a visual closure that follows an earlier one (the node of which is
+  // `reference_node`): the pending inferences it validated (d_tot) or
+  // discarded.
+  int reference_node = -1;
+  std::vector<InferredClosure> inferred;
+  std::vector<InferredClosure> discarded;
 };
 
 class CatGraphFilter {
@@ -125,8 +152,16 @@ class CatGraphFilter {
   bool Eligible(int node) const;
   void SeedUniformly(std::size_t count, std::vector<Particle>& out);
   // Moves the particles by u plus noise and projects them back; adds log Eq 1.
-  void MotionAndProjection(const Pose2& u);
-  LocationHypothesis BestHypothesis();
+  void MotionAndProjection(std::vector<Particle>& particles, const Pose2& u, std::mt19937_64& rng);
+  LocationHypothesis BestHypothesis(const std::vector<Particle>& particles);
+  // The pose of a hypothesis (heading turned by π for direction −1) in the
+  // local graph `local_` holds.
+  std::optional<Pose2> HypothesisPose(const LocationHypothesis& h) const;
+  // The loop edge a hypothesis gives: the nearer end of its edge and that
+  // node's pose in the hypothesis' frame.
+  std::pair<int, Pose2> LoopTo(const LocationHypothesis& h);
+  // CAT-Graph+ after the visual step (spec §3).
+  void OdometricStep(const Pose2& u, CatGraphStep& step);
 
   const FabMapModel& model_;
   CatGraphOptions options_;
@@ -148,6 +183,14 @@ class CatGraphFilter {
   std::vector<std::int64_t> node_ll_step_; // ... valid where equal to steps_
   std::int64_t steps_ = 0;
   double mapped_mass_ = 0.0;
+
+  // CAT-Graph+ state (spec §3.2).
+  std::vector<Particle> odometric_;        // the odometric particle set O
+  std::mt19937_64 odometric_rng_;          // its own noise: V never depends on O
+  int reference_node_ = -1;                // N_j of the last visual closure
+  LocationHypothesis reference_location_;  // y_j'
+  Pose2 T_since_reference_;                // odometry since j
+  std::vector<InferredClosure> pending_;
 };
 
 }  // namespace catgraph

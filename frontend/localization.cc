@@ -4,6 +4,7 @@
 #include <atomic>
 #include <mutex>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -80,6 +81,14 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     return (truth[k].translation() - (a + h.alpha * (b - a))).norm();
   };
 
+  std::map<int, int> visual_closure_of_frame;  // frame -> closure id
+  auto add_closure = [&](const LoopClosure& c) {
+    result.closures.push_back(c);
+    Provenance provenance;
+    for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
+    result.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
+                                        {c.T_frame_matched, information}, c.kind, provenance, {}, {}});
+  };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
     const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
     const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, words[k]);
@@ -104,17 +113,37 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     if (step.closure) {
       f.closure = true;
       f.matched_frame = frame_of(step.matched_node);
-      VisualClosure c;
+      LoopClosure c;
       c.id = static_cast<int>(result.graph.constraints.size());
       c.frame = f.frame;
       c.matched_frame = f.matched_frame;
       c.T_frame_matched = step.T_node_matched;
       c.hypothesis = step.best.value;
       c.error_m = f.error_m;
-      result.closures.push_back(c);
-      result.graph.constraints.push_back({ClosureId(c.id), id, PoseId(c.matched_frame),
-                                          {c.T_frame_matched, information}, ClosureKind::kVisual, {}, {}, {}});
+      add_closure(c);
+      // CAT-Graph+: what this visual closure validated or discarded.
+      const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
+      const int reference = found == visual_closure_of_frame.end() ? -1 : found->second;
+      for (const InferredClosure& inferred : step.inferred) {
+        LoopClosure i;
+        i.id = static_cast<int>(result.graph.constraints.size());
+        i.kind = ClosureKind::kOdometryInferred;
+        i.frame = frame_of(inferred.node);
+        i.matched_frame = frame_of(inferred.matched_node);
+        i.T_frame_matched = inferred.T_node_matched;
+        i.hypothesis = inferred.location.value;
+        i.error_m = location_error(static_cast<std::size_t>(i.frame), inferred.location);
+        i.parents = {reference, c.id};
+        add_closure(i);
+      }
+      for (const InferredClosure& inferred : step.discarded) {
+        const int at = frame_of(inferred.node);
+        result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, c.id,
+                                               location_error(static_cast<std::size_t>(at), inferred.location)});
+      }
+      visual_closure_of_frame[f.frame] = c.id;
     }
+    f.inference_pending = step.inference_pending;
     result.frames.push_back(f);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
       options.on_progress("filter", k + 1, d.frames.size());

@@ -28,20 +28,35 @@ struct FrameLocalization {
   bool closure = false;
   int matched_frame = -1;         // frame of the matched node (closures)
   double error_m = kNoError;      // best hypothesis against ground truth
+  bool inference_pending = false; // CAT-Graph+: passed local validation
 };
 
-struct VisualClosure {
+// A loop closure of the front end: visual (CAT-Graph) or odometry-inferred
+// (CAT-Graph+). Its id is its constraint id in the result's pose graph.
+struct LoopClosure {
   int id = 0;
+  ClosureKind kind = ClosureKind::kVisual;  // kVisual or kOdometryInferred
   int frame = -1;                 // the current frame
   int matched_frame = -1;         // the frame nearest to the matched location
   Pose2 T_frame_matched;          // matched frame's pose in the current frame's
-  double hypothesis = 0.0;
+  double hypothesis = 0.0;        // Eq 4 of the filter that made it
   double error_m = kNoError;      // position error of the matched location
+  // Inferred: the visual closure it hangs from and the one that validated it.
+  std::vector<int> parents;
+};
+
+// Inferences that passed local validation but failed total-path validation.
+struct DiscardedInference {
+  int frame = -1, matched_frame = -1;
+  int reference_closure = -1;     // the visual closure they hung from
+  int validating_closure = -1;    // the one whose d_tot check failed
+  double error_m = kNoError;
 };
 
 struct LocalizationResult {
   std::vector<FrameLocalization> frames;
-  std::vector<VisualClosure> closures;
+  std::vector<LoopClosure> closures;  // in the order they were made
+  std::vector<DiscardedInference> discarded_inferences;
   PoseGraph2 graph;               // vertex id = frame index; initial guess = odometry
   std::size_t words_per_frame_median = 0;
 };

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -119,6 +120,89 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
   CHECK(first_lap_closures == 0);
   CHECK(second_lap_closures >= 0.6 * second_lap_frames);
   CHECK(worst_error <= 1.0);
+}
+
+// Two laps of the ring; on the second, the stretch [10 m, 16 m) looks new
+// (words no training image has), as a refurnished corridor does.
+struct ChangedRingRun {
+  std::vector<CatGraphStep> steps;
+  int per_lap = 0;
+};
+ChangedRingRun RunChangedRing(bool odometric_inference) {
+  RingWorld world;
+  std::vector<WordSet> training;
+  for (double s = 0.0; s < RingWorld::kCircumference; s += 0.1) training.push_back(world.Observe(s));
+  const int changed_word = RingWorld::Words();  // words beyond the ring's
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + 40), FabMapOptions{});
+  CatGraphOptions options;
+  options.num_particles = 500;
+  options.new_place_log_offset = 0.0;
+  options.odometric_inference = odometric_inference;
+  CatGraphFilter filter(model, options);
+  ChangedRingRun run;
+  run.per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  for (int k = 0; k < 2 * run.per_lap; ++k) {
+    const double s = k * RingWorld::kStep;
+    const double on_ring = std::fmod(s, RingWorld::kCircumference);
+    WordSet z = world.Observe(s);
+    if (k >= run.per_lap && on_ring >= 10.0 && on_ring < 16.0) {
+      z = {changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3, changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3 + 1};
+    }
+    run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), z));
+  }
+  return run;
+}
+
+// Distance along the ring between frames a and b.
+double RingDistance(int a, int b) {
+  const double apart = std::fmod(std::abs(a - b) * RingWorld::kStep, RingWorld::kCircumference);
+  return std::min(apart, RingWorld::kCircumference - apart);
+}
+
+TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, from odometry",
+          "[frontend][catgraph][catgraph-plus]") {
+  const ChangedRingRun run = RunChangedRing(true);
+  int changed = 0, visual_in_changed = 0, inferred_in_changed = 0;
+  std::set<int> inferred_nodes;
+  double worst = 0.0;
+  for (const CatGraphStep& step : run.steps) {
+    for (const InferredClosure& c : step.inferred) {
+      inferred_nodes.insert(c.node);
+      CHECK(step.closure);                      // validated at a visual closure ...
+      CHECK(step.reference_node >= 0);          // ... hanging from an earlier one
+      CHECK(step.reference_node < c.node);
+      const int frame = c.node, matched = c.matched_node;  // node ids are frame indices here
+      worst = std::max(worst, RingDistance(frame, matched));
+    }
+  }
+  for (int k = run.per_lap; k < 2 * run.per_lap; ++k) {
+    const double on_ring = std::fmod(k * RingWorld::kStep, RingWorld::kCircumference);
+    if (on_ring < 10.5 || on_ring >= 16.0) continue;  // the first 0.5 m: the filter still coasts
+    ++changed;
+    visual_in_changed += run.steps[static_cast<std::size_t>(k)].closure;
+    inferred_in_changed += inferred_nodes.count(k) ? 1 : 0;
+  }
+  INFO("changed stretch: " << changed << " frames, " << visual_in_changed << " visual, " << inferred_in_changed
+                           << " inferred; worst inferred error " << worst << " m");
+  CHECK(visual_in_changed <= 0.1 * changed);
+  CHECK(inferred_in_changed >= 0.7 * changed);
+  CHECK(worst <= 0.5);
+}
+
+TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone makes them",
+          "[frontend][catgraph][catgraph-plus]") {
+  const ChangedRingRun with = RunChangedRing(true), without = RunChangedRing(false);
+  REQUIRE(with.steps.size() == without.steps.size());
+  int visual = 0;
+  for (std::size_t k = 0; k < with.steps.size(); ++k) {
+    CAPTURE(k);
+    CHECK(with.steps[k].closure == without.steps[k].closure);
+    CHECK(with.steps[k].matched_node == without.steps[k].matched_node);
+    CHECK(with.steps[k].best.value == without.steps[k].best.value);
+    CHECK(without.steps[k].inferred.empty());
+    visual += with.steps[k].closure;
+  }
+  CHECK(visual > 0);
 }
 
 TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",
