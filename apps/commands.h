@@ -24,6 +24,7 @@ void AddConvertCommand(CLI::App& app, std::ostream& out);
 void AddPlotDatasetCommand(CLI::App& app, std::ostream& out);
 void AddVocabularyCommand(CLI::App& app, std::ostream& out);
 void AddLocalizeCommand(CLI::App& app, std::ostream& out);
+void AddInferenceSweepCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

@@ -1,9 +1,10 @@
 // catgraph localize DATASET [--vocabulary V] -o OUT/ [--particles N] [--seed S]
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstdio>
+#include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -224,7 +225,91 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
   }
 }
 
+struct InferenceSweepOptions {
+  LocalizeCommandOptions base;
+  std::vector<double> d_tot = {0.5, 1.0, 2.5, 5.0, 7.5, 10.0, 12.5};
+  std::vector<double> d_loc = {0.5, 1.0, 2.5, 5.0, 7.5, 10.0};
+  double false_threshold_m = 1.0;
+};
+
+// The CAT-Graph+ paper's Table III: CAT-Graph+ over every (d_tot, d_loc),
+// the features extracted once.
+void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
+  if (o.base.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
+  if (!(o.false_threshold_m > 0.0)) throw std::invalid_argument("--false-threshold: expected > 0");
+  const Dataset d = ReadDataset(o.base.dataset);
+  if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "the sweep needs ground truth (groundtruth.csv)");
+  const Vocabulary vocabulary = VocabularyFor(d, o.base, out);
+  LocalizationOptions options = o.base.localization;
+  options.threads = o.base.threads;
+  const std::vector<WordSet> words = ExtractWords(d, vocabulary, options);
+  const FabMapModel model(vocabulary.tree(), FabMapOptions{});
+  std::ostringstream csv, table;
+  csv << "d_tot_m,d_loc_m,inferred,false,largest_error_m,mean_false_error_m,mean_error_m,discarded\n";
+  table << "False inferences (error > " << Number(o.false_threshold_m, "%.2f")
+        << " m): count / largest error / mean error of the false ones / mean error of all inferences (m).\n\n";
+  table << "| d_tot \\ d_loc |";
+  for (const double l : o.d_loc) table << ' ' << Number(l, "%.1f") << " |";
+  table << "\n|---|";
+  for (std::size_t i = 0; i < o.d_loc.size(); ++i) table << "---|";
+  table << '\n';
+  ProgressBar bar("runs");
+  std::size_t done = 0;
+  for (const double t : o.d_tot) {
+    table << "| " << Number(t, "%.1f") << " m |";
+    for (const double l : o.d_loc) {
+      options.filter.odometric_inference = true;
+      options.filter.total_validation_m = t;
+      options.filter.local_validation_m = l;
+      const LocalizationResult r = Localize(d, words, model, options);
+      int inferred = 0, wrong = 0;
+      double largest = 0.0, sum_false = 0.0, sum = 0.0;
+      for (const auto& c : r.closures) {
+        if (c.kind != ClosureKind::kOdometryInferred) continue;
+        ++inferred;
+        sum += c.error_m;
+        largest = std::max(largest, c.error_m);
+        if (c.error_m > o.false_threshold_m) ++wrong, sum_false += c.error_m;
+      }
+      const double mean_false = wrong > 0 ? sum_false / wrong : 0.0, mean = inferred > 0 ? sum / inferred : 0.0;
+      csv << t << ',' << l << ',' << inferred << ',' << wrong << ',' << Number(largest) << ',' << Number(mean_false)
+          << ',' << Number(mean) << ',' << r.discarded_inferences.size() << '\n';
+      table << ' ' << (wrong == 0 ? std::string("0") : std::to_string(wrong) + " / " + Number(largest, "%.2f") +
+                                                          " / " + Number(mean_false, "%.2f") + " / " + Number(mean, "%.2f"))
+            << " |";
+      if (!o.base.quiet) bar.Update(++done, o.d_tot.size() * o.d_loc.size());
+    }
+    table << '\n';
+  }
+  const std::filesystem::path dir(o.base.output);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
+  WriteFileAtomically(dir / "sweep.csv", [&](std::ostream& f) { f << csv.str(); });
+  WriteFileAtomically(dir / "table.md", [&](std::ostream& f) { f << table.str(); });
+  out << table.str();
+}
+
 }  // namespace
+
+void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<InferenceSweepOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "inference-sweep",
+      "CAT-Graph+ over a grid of total-path (d_tot) and local (d_loc) validation tolerances, the features "
+      "extracted once: false inferences per cell, as the CAT-Graph+ paper's Table III (sweep.csv, table.md).");
+  cmd->add_option("dataset", o->base.dataset, "Dataset directory (with ground truth)")->required();
+  cmd->add_option("-o,--output", o->base.output, "Output directory")->required();
+  cmd->add_option("--vocabulary", o->base.vocabulary, "Vocabulary file; default: as catgraph localize");
+  cmd->add_option("--d-tot", o->d_tot, "d_tot values (m)")->delimiter(',')->capture_default_str();
+  cmd->add_option("--d-loc", o->d_loc, "d_loc values (m)")->delimiter(',')->capture_default_str();
+  cmd->add_option("--false-threshold", o->false_threshold_m, "An inference farther than this from the truth is false (m)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->base.localization.filter.seed, "Filter seed")->capture_default_str();
+  cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
+  cmd->callback([o, &out] { RunInferenceSweep(*o, out); });
+}
 
 void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   auto o = std::make_shared<LocalizeCommandOptions>();

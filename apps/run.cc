@@ -27,6 +27,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddPlotDatasetCommand(app, out);
   AddVocabularyCommand(app, out);
   AddLocalizeCommand(app, out);
+  AddInferenceSweepCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
