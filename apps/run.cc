@@ -28,6 +28,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddVocabularyCommand(app, out);
   AddLocalizeCommand(app, out);
   AddInferenceSweepCommand(app, out);
+  AddSadMatchCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

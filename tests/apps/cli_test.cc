@@ -340,6 +340,31 @@ TEST_CASE("localize on office-change: closures outside the changed region, none 
   CHECK(std::filesystem::exists(dir / "out" / "graph.g2o"));
   CHECK(std::filesystem::exists(dir / "out" / "localization.png"));
   CHECK(std::filesystem::exists(dir / "out" / "discarded_inferences.json"));
+
+  // The baseline on the same data: its best threshold admits no false match
+  // and almost nothing where the furniture moved.
+  const Result sad = Run({"sad-match", (dir / "data").string(), "-o", (dir / "sad").string()});
+  INFO(sad.out << sad.err);
+  REQUIRE(sad.status == 0);
+  std::ifstream matches(dir / "sad" / "matches.csv");
+  std::string line;
+  std::getline(matches, line);
+  CHECK(line == "query_frame,template_frame,difference,shift_px,error_m,changed,accepted");
+  int accepted = 0, accepted_changed = 0, changed_queries = 0;
+  while (std::getline(matches, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    REQUIRE(f.size() == 7);
+    const bool is_changed = f[5] == "1", is_accepted = f[6] == "1";
+    changed_queries += is_changed;
+    accepted += is_accepted;
+    accepted_changed += is_changed && is_accepted;
+    if (is_accepted) CHECK(std::stod(f[4]) <= 1.0);
+  }
+  CHECK(accepted > 0);
+  CHECK(accepted_changed <= 0.1 * changed_queries);
+  CHECK(std::filesystem::exists(dir / "sad" / "sad.png"));
 }
 
 }  // namespace
