@@ -55,9 +55,9 @@ Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std:
   return v;
 }
 
-// The CAT-Graph+ paper's Figs. 7 and 8 for CAT-Graph alone: the best
-// hypothesis of every frame, and the error of every visual closure, against
-// the frame index, with the frames that see a changed region marked.
+// The CAT-Graph+ paper's Figs. 7 and 8: the best hypothesis of every frame,
+// and the error of every visual and odometry-inferred closure, against the
+// frame index, with the frames that see a changed region marked.
 plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold) {
   plot::Figure figure;
   figure.rows = 2;
@@ -86,6 +86,12 @@ plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, d
     (h.closure ? error : best_error).x.push_back(k);
     (h.closure ? error : best_error).y.push_back(h.error_m);
   }
+  plot::Series inferred{"odometry-inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(4), 2.0};
+  for (const auto& c : r.closures) {
+    if (c.kind != ClosureKind::kOdometryInferred || std::isnan(c.error_m)) continue;
+    inferred.x.push_back(c.frame);
+    inferred.y.push_back(c.error_m);
+  }
   plot::Series t_h{"T_h", {0.0, static_cast<double>(r.frames.size())}, {threshold, threshold},
                    plot::SeriesStyle::kLine, {0.3, 0.3, 0.3, 1.0}, 1.0, true};
   plot::Axes top;
@@ -102,6 +108,7 @@ plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, d
   bottom.y_scale = plot::Scale::kSymlog;
   changed.y.assign(changed.y.size(), 0.0);
   bottom.series = {changed, best_error, error};
+  if (!inferred.x.empty()) bottom.series.push_back(inferred);
   figure.axes = {top, bottom};
   return figure;
 }

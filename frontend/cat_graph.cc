@@ -269,7 +269,12 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // the previous frame says nothing about where the particles went: they are
   // seeded afresh and the motion terms are left out for this frame.
   const bool restart = first || time_s - time_s_ > options_.sequence_break_s;
-  if (restart && !first) particles_.clear();
+  if (restart && !first) {
+    particles_.clear();
+    odometric_.clear();  // CAT-Graph+ waits for the next visual closure
+    reference_node_ = -1;
+    pending_.clear();
+  }
   time_s_ = time_s;
   if (!first) path_length_m_ += u.translation().norm();
   if (!first) odometry_pose_ = odometry_pose_ * u;
