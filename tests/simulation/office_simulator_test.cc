@@ -92,11 +92,11 @@ TEST_CASE("a simulated dataset reads back with every frame inside its odometry",
   CHECK(d.frames[1].timestamp_s - d.frames[0].timestamp_s == Approx(1.0 / 7.5));
   CHECK(d.odometry[1].timestamp_s - d.odometry[0].timestamp_s == Approx(0.1));
   CHECK(d.frames.back().timestamp_s <= d.odometry.back().timestamp_s);
-  // The first frame is at the route's start, facing along it.
+  // The first frame is at the route's start (1.2, 12), facing along it (south).
   const Pose2 start = InterpolatePose(d.ground_truth, d.frames[0].timestamp_s);
-  CHECK(start.x() == Approx(3.0));
-  CHECK(start.y() == Approx(1.2));
-  CHECK(start.theta() == Approx(0.0).margin(1e-9));
+  CHECK(start.x() == Approx(1.2));
+  CHECK(start.y() == Approx(12.0));
+  CHECK(start.theta() == Approx(-std::numbers::pi / 2));
   const cv::Mat image = cv::imread(d.ImagePath(0).string());
   CHECK(image.cols == 261);
   CHECK(image.rows == 101);
