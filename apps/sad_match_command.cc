@@ -1,9 +1,12 @@
 // catgraph sad-match DATASET -o OUT/ [--tolerance M] [--normalize N] [--every N] [--shift P]
 // The CAT-Graph+ paper's baseline (its §5.2, Fig. 9): SAD template matching.
 #include <cmath>
+#include <fstream>
 #include <cstdio>
 #include <memory>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/plot/figure.h"
@@ -16,7 +19,7 @@ namespace catgraph {
 namespace {
 
 struct SadCommandOptions {
-  std::string dataset, output, normalization = "none";
+  std::string dataset, output, normalization = "none", localization;
   double tolerance_m = 1.0;
   SadOptions sad;
 };
@@ -79,12 +82,35 @@ void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
     accepted_changed += in_changed && ok;
     n_accepted += ok;
   }
+  // Beside it, from a `catgraph localize` output: the frames CAT-Graph's
+  // visual closures and CAT-Graph+'s inferred closures matched.
+  plot::Series visual{"CAT-Graph visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(1), 1.5};
+  plot::Series inferred{"CAT-Graph+ inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(4), 1.5};
+  if (!o.localization.empty()) {
+    const std::filesystem::path file = std::filesystem::path(o.localization) / "closures.json";
+    std::ifstream in(file);
+    if (!in) throw FileError(file.string(), 0, "cannot open (expected a catgraph localize output directory)");
+    nlohmann::json closures;
+    try {
+      closures = nlohmann::json::parse(in);
+      for (const auto& c : closures) {
+        plot::Series& s = c.at("kind").get<std::string>() == "inferred" ? inferred : visual;
+        s.x.push_back(c.at("frame").get<double>());
+        s.y.push_back(c.at("matched_frame").get<double>());
+      }
+    } catch (const nlohmann::json::exception& e) {
+      throw FileError(file.string(), 0, std::string("expected closures.json of catgraph localize: ") + e.what());
+    }
+  }
   plot::Axes axes;
   axes.title = "SAD template matching (16 x 8, +-" + std::to_string(o.sad.max_shift_px) + " px), threshold " +
                Fixed(best, "%.4f");
   axes.x_label = "query frame";
   axes.y_label = "matched template frame";
-  axes.series = {changed, all, accepted};
+  axes.series = {changed, all};
+  if (!visual.x.empty()) axes.series.push_back(visual);
+  if (!inferred.x.empty()) axes.series.push_back(inferred);
+  axes.series.push_back(accepted);
   plot::Figure figure;
   figure.axes = {axes};
   plot::SaveFigure(figure, dir / "sad.png");
@@ -115,6 +141,9 @@ void AddSadMatchCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--tolerance", o->tolerance_m, "A match farther than this from the truth is false (m)")
       ->capture_default_str();
   cmd->add_option("--normalize", o->normalization, "none, local (RatSLAM) or patch (SeqSLAM)")->capture_default_str();
+  cmd->add_option("--localization", o->localization,
+                  "A catgraph localize output directory: its closures are drawn beside the matches")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--every", o->sad.every, "Every N-th frame is a template / a query")->capture_default_str();
   cmd->add_option("--shift", o->sad.max_shift_px, "Sideways shifts tried each way (px)")->capture_default_str();
   cmd->callback([o, &out] { RunSadMatch(*o, out); });

@@ -439,9 +439,12 @@ void CatGraphFilter::OdometricStep(const Pose2& u, CatGraphStep& step) {
   // Local validation (§3.3, Eq 9-11): the odometric hypothesis' pose
   // relative to the last visual match, along the old graph's shortest path,
   // against the odometry since then.
+  // Through nodes older than the exclusion window only, not through the
+  // odometric gate: the gate is about where the robot may be now, and the
+  // reference lies behind it.
   const GraphEdge& e = graph_.edge(reference_location_.edge);
   const double radius = T_since_reference_.translation().norm() + options_.local_validation_m + e.length_m;
-  builder_.Build(graph_, e.from, radius, eligible_, local_);
+  builder_.Build(graph_, e.from, radius, [this](int n) { return n < eligible_below_; }, local_);
   const auto from = HypothesisPose(reference_location_);
   const auto to = HypothesisPose(step.odometric_best);
   if (!from || !to) return;
