@@ -104,13 +104,15 @@ int FeedMap(const Fixture& f, CatGraphFilter& filter, int extra_laps, double& ti
 }
 
 // One CAT-Graph step (motion, Eq 1-2, new place, Eq 4, graph update,
-// resampling) on traversal 2 of office-change, feature extraction excluded.
+// resampling), with or without CAT-Graph+'s odometric filter and
+// validation, on traversal 2 of office-change, feature extraction excluded.
 // Counters: per-step percentiles over the timed steps (ms), the share of
 // steps that closed a loop, and the heap bytes per graph node.
 void BM_FilterStep(benchmark::State& state) {
   const Fixture& f = SharedFixture();
   const int extra_laps = static_cast<int>(state.range(0));
   CatGraphOptions options;  // n_p = 1000, Table I
+  options.odometric_inference = state.range(1) != 0;  // CAT-Graph+ beside it
   std::unique_ptr<CatGraphFilter> filter;
   std::size_t k = f.change.frames.size();
   int frame = 0;
@@ -148,7 +150,15 @@ void BM_FilterStep(benchmark::State& state) {
   bytes += static_cast<double>(filter->graph().edges().capacity() * sizeof(GraphEdge));
   state.counters["bytes_per_node"] = bytes / static_cast<double>(filter->graph().nodes().size());
 }
-BENCHMARK(BM_FilterStep)->Arg(0)->Arg(1)->Arg(4)->Unit(benchmark::kMillisecond)->Iterations(1459);
+// Args: extra laps far away, CAT-Graph+ (0: CAT-Graph alone).
+BENCHMARK(BM_FilterStep)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({4, 0})
+    ->Args({0, 1})
+    ->Args({4, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1460);
 
 }  // namespace
 }  // namespace catgraph
