@@ -16,7 +16,14 @@
 //             reseeding particles uniformly on eligible edges (§2.10).
 //
 // Nodes younger than the exclusion window are not eligible for particles,
-// so the robot's own recent frames never match (§2.0).
+// so the robot's own recent frames never match (§2.0); nor are nodes that
+// dead reckoning rules out (the odometric gate). The additions to the spec —
+// the gate, the forward-camera rule, the new-place offset and memory, the
+// restart after a gap — are options, explained in docs/frontend.md.
+//
+// CAT-Graph+ (§3, on by default): an odometric particle filter beside the
+// visual one infers closures between visual closures, validated locally
+// (d_loc) and at the next visual closure (d_tot); CatGraphStep::inferred.
 //
 // Deterministic for a seed. Thread-compatible.
 #ifndef CATGRAPH_FRONTEND_CAT_GRAPH_H_
@@ -67,7 +74,7 @@ struct CatGraphOptions {
                                            // frame's step + 3σ); > 0
   int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1
   // The camera sees one way (the paper's forward patch), so particles facing
-  // against the nodes' headings get the new-place likelihood, not the
+  // against the nodes' headings get FAB-MAP's mean-field likelihood, not the
   // nodes'; false for a panoramic camera (spec Eq 2 as written).
   bool forward_camera = true;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
