@@ -135,9 +135,7 @@ void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
   const LocalizationResult r = Localize(d, vocabulary, o.localization);
 
   const std::filesystem::path dir(o.output);
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
+  CreateDirectories(dir, "output directory");
   WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
     f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
          "matched_frame,error_m,inference_pending\n";
@@ -289,9 +287,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
     table << '\n';
   }
   const std::filesystem::path dir(o.base.output);
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
+  CreateDirectories(dir, "output directory");
   WriteFileAtomically(dir / "sweep.csv", [&](std::ostream& f) { f << csv.str(); });
   WriteFileAtomically(dir / "table.md", [&](std::ostream& f) { f << table.str(); });
   out << table.str();

@@ -39,9 +39,7 @@ void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
   const double best = BestThreshold(matches, o.tolerance_m);
 
   const std::filesystem::path dir(o.output);
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw FileError(dir.string(), 0, "cannot create the output directory: " + ec.message());
+  CreateDirectories(dir, "output directory");
   WriteFileAtomically(dir / "matches.csv", [&](std::ostream& f) {
     f << "query_frame,template_frame,difference,shift_px,error_m,changed,accepted\n";
     for (const auto& m : matches) {

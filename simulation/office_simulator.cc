@@ -95,9 +95,7 @@ SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesyste
       PlanFrames(run, scenario.camera.frame_rate_hz, options.max_frames);
   const OfficeWorld world = MakeWorld(scenario);
 
-  std::error_code ec;
-  std::filesystem::create_directories(directory / "images", ec);
-  if (ec) throw FileError((directory / "images").string(), 0, "cannot create the directory: " + ec.message());
+  CreateDirectories(directory / "images");
 
   // Render and write the images on several threads; frames are independent.
   std::vector<double> changed_fraction(planned.size(), 0.0);

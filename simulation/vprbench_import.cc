@@ -71,9 +71,7 @@ VprBenchImportSummary ImportVprBench(const std::filesystem::path& source,
   plans[2] = {3, options.speed_m_s, 0.0, {{-lead, 0.0}, {length + lead, 0.0}}};
   const RobotRun run = DriveRoutes(plans, options.robot, options.odometry, options.seed);
 
-  std::error_code ec;
-  std::filesystem::create_directories(output / "images", ec);
-  if (ec) throw FileError((output / "images").string(), 0, "cannot create the directory: " + ec.message());
+  CreateDirectories(output / "images");
   Dataset d;
   d.root = output;
   const std::size_t total = reference.size() + query.size();

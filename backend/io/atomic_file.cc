@@ -64,4 +64,10 @@ void WriteBytesAtomically(const std::filesystem::path& path, const std::vector<s
   });
 }
 
+void CreateDirectories(const std::filesystem::path& dir, std::string_view what) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw FileError(dir.string(), 0, "cannot create the " + std::string(what) + ": " + ec.message());
+}
+
 }  // namespace catgraph

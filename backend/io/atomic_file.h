@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <ostream>
+#include <string_view>
 #include <vector>
 
 namespace catgraph {
@@ -21,6 +22,10 @@ void WriteFileAtomically(const std::filesystem::path& path,
 
 // The same for bytes already in memory (an encoded image).
 void WriteBytesAtomically(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes);
+
+// Creates `dir` and its parents; throws FileError naming it ("cannot create
+// the <what>: <reason>") when that fails.
+void CreateDirectories(const std::filesystem::path& dir, std::string_view what = "directory");
 
 }  // namespace catgraph
 
