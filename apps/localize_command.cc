@@ -8,7 +8,6 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "apps/commands.h"
 #include "apps/plot/figure.h"
@@ -44,8 +43,7 @@ Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std:
   std::vector<cv::Mat> images;
   for (std::size_t k = 0; k < frames.size(); k += every) {
     const std::size_t i = frames[k];
-    images.push_back(cv::imread(d.ImagePath(i).string(), cv::IMREAD_COLOR));
-    if (images.back().empty()) throw FileError(d.ImagePath(i).string(), 0, "cannot decode the image");
+    images.push_back(ReadImage(d.ImagePath(i)));
   }
   VocabularyOptions options;
   options.words = o.words;

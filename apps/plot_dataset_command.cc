@@ -17,7 +17,7 @@
 #include "apps/plot/figure.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
-#include "backend/io/file_error.h"
+#include "frontend/vocabulary.h"
 
 namespace catgraph {
 namespace {
@@ -103,8 +103,7 @@ void WritePair(const Dataset& d, const Eigen::Vector2d& place, const std::filesy
       const double dist = (InterpolatePose(d.ground_truth, d.frames[i].timestamp_s).translation() - place).norm();
       if (dist < best_d) best_d = dist, best = i;
     }
-    const cv::Mat image = cv::imread(d.ImagePath(best).string(), cv::IMREAD_COLOR);
-    if (image.empty()) throw FileError(d.ImagePath(best).string(), 0, "cannot decode the image");
+    const cv::Mat image = ReadImage(d.ImagePath(best));
     cv::Mat big;
     cv::resize(image, big, cv::Size(), 3.0, 3.0, cv::INTER_NEAREST);
     cv::Mat panel(big.rows + 36, big.cols, CV_8UC3, cv::Scalar(255, 255, 255));

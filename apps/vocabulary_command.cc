@@ -5,12 +5,10 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "backend/io/dataset.h"
-#include "backend/io/file_error.h"
 #include "frontend/vocabulary.h"
 
 namespace catgraph {
@@ -40,8 +38,7 @@ void RunTrain(const VocabularyCommandOptions& o, std::ostream& out) {
   ProgressBar bar("images read");
   std::vector<cv::Mat> images;
   for (const auto& path : paths) {
-    images.push_back(cv::imread(path.string(), cv::IMREAD_COLOR));
-    if (images.back().empty()) throw FileError(path.string(), 0, "cannot decode the image");
+    images.push_back(ReadImage(path));
     if (!o.quiet) bar.Update(images.size(), paths.size());
   }
   const Vocabulary vocabulary = TrainVocabulary(images, options);

@@ -42,7 +42,7 @@ struct Fixture {
     // traversal 1.
     std::vector<cv::Mat> images;
     for (std::size_t i = 0; i < change.frames.size(); i += 8) {
-      if (change.frames[i].traversal == 1) images.push_back(cv::imread(change.ImagePath(i).string()));
+      if (change.frames[i].traversal == 1) images.push_back(ReadImage(change.ImagePath(i)));
     }
     VocabularyOptions options;
     options.words = 500;
@@ -74,7 +74,7 @@ void BM_FeaturesAndWords(benchmark::State& state) {
   const Fixture& f = SharedFixture();
   std::size_t i = 0;
   std::vector<cv::Mat> images;
-  for (std::size_t k = 0; k < f.change.frames.size(); k += 61) images.push_back(cv::imread(f.change.ImagePath(k).string()));
+  for (std::size_t k = 0; k < f.change.frames.size(); k += 61) images.push_back(ReadImage(f.change.ImagePath(k)));
   for (auto _ : state) {
     benchmark::DoNotOptimize(f.vocabulary->Words(images[i]));
     i = (i + 1) % images.size();

@@ -9,9 +9,7 @@
 #include <string>
 #include <thread>
 
-#include <opencv2/imgcodecs.hpp>
 
-#include "backend/io/file_error.h"
 
 namespace catgraph {
 
@@ -24,9 +22,7 @@ std::vector<WordSet> ExtractWords(const Dataset& d, const Vocabulary& vocabulary
   auto work = [&](bool report) {
     for (std::size_t i = next++; i < d.frames.size(); i = next++) {
       try {
-        const cv::Mat image = cv::imread(d.ImagePath(i).string(), cv::IMREAD_COLOR);
-        if (image.empty()) throw FileError(d.ImagePath(i).string(), 0, "cannot decode the image");
-        words[i] = vocabulary.Words(image);
+        words[i] = vocabulary.Words(ReadImage(d.ImagePath(i)));
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
         if (!error) error = std::current_exception();

@@ -6,10 +6,9 @@
 #include <stdexcept>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "backend/io/file_error.h"
+#include "frontend/vocabulary.h"
 
 namespace catgraph {
 namespace {
@@ -120,11 +119,7 @@ std::vector<SadMatch> MatchDataset(const Dataset& d, const SadOptions& o) {
   Validate(o);
   if (d.frames.empty()) return {};
   const int first = d.Traversals().front();
-  auto load = [&](std::size_t i) {
-    const cv::Mat image = cv::imread(d.ImagePath(i).string(), cv::IMREAD_COLOR);
-    if (image.empty()) throw FileError(d.ImagePath(i).string(), 0, "cannot decode the image");
-    return SadTemplate(image, o);
-  };
+  auto load = [&](std::size_t i) { return SadTemplate(ReadImage(d.ImagePath(i)), o); };
   std::vector<std::size_t> template_frames, query_frames;
   std::vector<cv::Mat> templates;
   int seen_first = 0, seen_other = 0;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "backend/graph/name_table.h"
@@ -71,6 +72,12 @@ Vocabulary::Vocabulary(FeatureType feature, cv::Mat centres, ChowLiuTree tree)
                                 std::to_string(tree_.vocabulary_size()) + " words, the centres " +
                                 std::to_string(centres_.rows));
   }
+}
+
+cv::Mat ReadImage(const std::filesystem::path& path) {
+  cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
+  if (image.empty()) throw FileError(path.string(), 0, "cannot decode the image");
+  return image;
 }
 
 cv::Mat ComputeDescriptors(FeatureType feature, const cv::Mat& image) {

@@ -41,6 +41,10 @@ struct VocabularyOptions {
   std::uint64_t seed = 1;
 };
 
+// An image file as colour (BGR); throws FileError naming the file when it
+// cannot be read or decoded.
+cv::Mat ReadImage(const std::filesystem::path& path);
+
 // Descriptors of an image (colour or grey; detected on grey), one CV_32F row
 // each (binary descriptors as byte values).
 cv::Mat ComputeDescriptors(FeatureType feature, const cv::Mat& image);
