@@ -75,6 +75,12 @@ struct RingWorld {
     return w;
   }
   static int Words() { return 4 * static_cast<int>(kCircumference / 0.5); }
+  // One lap observed every 0.1 m: the training images.
+  std::vector<WordSet> Lap() {
+    std::vector<WordSet> lap;
+    for (double s = 0.0; s < kCircumference; s += 0.1) lap.push_back(Observe(s));
+    return lap;
+  }
   // Odometry per frame: an arc of the ring.
   static Pose2 Step() {
     const double dtheta = 2.0 * std::numbers::pi * kStep / kCircumference;
@@ -82,11 +88,16 @@ struct RingWorld {
   }
 };
 
+// Distance along the ring between frames a and b.
+double RingDistance(int a, int b) {
+  const double apart = std::fmod(std::abs(a - b) * RingWorld::kStep, RingWorld::kCircumference);
+  return std::min(apart, RingWorld::kCircumference - apart);
+}
+
 TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and never on the first",
           "[frontend][catgraph]") {
   RingWorld world;
-  std::vector<WordSet> training;
-  for (double s = 0.0; s < RingWorld::kCircumference; s += 0.1) training.push_back(world.Observe(s));
+  const std::vector<WordSet> training = world.Lap();
   const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options;
   options.num_particles = 500;
@@ -110,8 +121,7 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
     ++second_lap_closures;
     // Distance along the ring between this frame and the matched node's.
     const int matched = filter.graph().node(step.matched_node).frame;
-    const double apart = std::fmod(std::abs(k - matched) * RingWorld::kStep, RingWorld::kCircumference);
-    const double error = std::min(apart, RingWorld::kCircumference - apart);
+    const double error = RingDistance(k, matched);
     worst_error = std::max(worst_error, error);
     if (error > 1.0) bad += std::to_string(k) + "->" + std::to_string(matched) + "(" + std::to_string(step.best.value) + ") ";
   }
@@ -130,8 +140,7 @@ struct ChangedRingRun {
 };
 ChangedRingRun RunChangedRing(bool odometric_inference) {
   RingWorld world;
-  std::vector<WordSet> training;
-  for (double s = 0.0; s < RingWorld::kCircumference; s += 0.1) training.push_back(world.Observe(s));
+  const std::vector<WordSet> training = world.Lap();
   const int changed_word = RingWorld::Words();  // words beyond the ring's
   const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + 40), FabMapOptions{});
   CatGraphOptions options;
@@ -151,12 +160,6 @@ ChangedRingRun RunChangedRing(bool odometric_inference) {
     run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), z));
   }
   return run;
-}
-
-// Distance along the ring between frames a and b.
-double RingDistance(int a, int b) {
-  const double apart = std::fmod(std::abs(a - b) * RingWorld::kStep, RingWorld::kCircumference);
-  return std::min(apart, RingWorld::kCircumference - apart);
 }
 
 TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, from odometry",
@@ -208,8 +211,7 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
 TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",
           "[frontend][catgraph]") {
   RingWorld world;
-  std::vector<WordSet> training;
-  for (double s = 0.0; s < RingWorld::kCircumference; s += 0.1) training.push_back(world.Observe(s));
+  const std::vector<WordSet> training = world.Lap();
   const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
   auto new_place_after_gap = [&](double sequence_break_s) {
     CatGraphOptions options;
