@@ -157,6 +157,56 @@ class SwitchableRelativePoseCost {
   SwitchFunction function_;
 };
 
+// A switchable constraint whose residual is also scaled by other switches
+// (the coupled closure hierarchy: a child closure by its parents'):
+// r = Psi(s_0) Psi(s_1) ... Psi(s_k) U e. Parameter blocks: pose i, pose j,
+// then the k + 1 switches, own first. The number of switches is known only at
+// run time, hence the dynamic cost function.
+template <typename PoseT>
+class CoupledSwitchableRelativePoseCost {
+ public:
+  static constexpr int kN = RelativePoseTraits<PoseT>::kResiduals;
+  using SqrtInformation = Eigen::Matrix<double, kN, kN>;
+
+  CoupledSwitchableRelativePoseCost(const PoseT& measurement, const SqrtInformation& sqrt_information,
+                                    SwitchFunction function, int num_switches)
+      : measurement_(measurement),
+        sqrt_information_(sqrt_information),
+        function_(function),
+        num_switches_(num_switches) {}
+
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residuals) const {
+    T scale(1.0);
+    for (int k = 0; k < num_switches_; ++k) {
+      scale *= SwitchableRelativePoseCost<PoseT>::Psi(parameters[2 + k][0], function_);
+    }
+    Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
+    r = scale * (sqrt_information_.template cast<T>() *
+                 RelativePoseTraits<PoseT>::Error(parameters[0], parameters[1], measurement_));
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const PoseT& measurement, const SqrtInformation& sqrt_info,
+                                     SwitchFunction function, int num_switches) {
+    constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
+    // Stride 4: a 3D pose block (7) takes two passes, a switch one.
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<CoupledSwitchableRelativePoseCost, 4>(
+        new CoupledSwitchableRelativePoseCost(measurement, sqrt_info, function, num_switches));
+    cost->AddParameterBlock(kP);
+    cost->AddParameterBlock(kP);
+    for (int k = 0; k < num_switches; ++k) cost->AddParameterBlock(1);
+    cost->SetNumResiduals(kN);
+    return cost;
+  }
+
+ private:
+  PoseT measurement_;
+  SqrtInformation sqrt_information_;
+  SwitchFunction function_;
+  int num_switches_;
+};
+
 // SE-Sync's chordal cost (Rosen et al., IJRR 2019):
 //   r = [ sqrt(kappa) vec(R_j - R_i R_z) ; sqrt(tau) (t_j - t_i - R_i t_z) ]
 // so that sum |r|^2 is SE-Sync's objective F.

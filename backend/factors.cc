@@ -1,8 +1,10 @@
 #include "backend/factors.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <ceres/ceres.h>
@@ -94,16 +96,37 @@ std::unique_ptr<ceres::LossFunction> BetweenFactor<PoseT>::NewLossFunction() con
 template <typename PoseT>
 SwitchableBetweenFactor<PoseT>::SwitchableBetweenFactor(
     PoseId from, PoseId to, SwitchId switch_id, const RelativePoseMeasurement<PoseT>& measurement,
-    SwitchFunction function)
+    SwitchFunction function, std::vector<SwitchId> coupled)
     : from_(from),
       to_(to),
       switch_(switch_id),
+      coupled_(std::move(coupled)),
       mean_(measurement.mean),
       sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
-      function_(function) {}
+      function_(function) {
+  for (std::size_t k = 0; k < coupled_.size(); ++k) {
+    if (coupled_[k] == switch_ ||
+        std::find(coupled_.begin(), coupled_.begin() + static_cast<std::ptrdiff_t>(k), coupled_[k]) !=
+            coupled_.begin() + static_cast<std::ptrdiff_t>(k)) {
+      throw std::invalid_argument("SwitchableBetweenFactor: switch " + std::to_string(coupled_[k].value()) +
+                                  " appears twice among the constraint's switches");
+    }
+  }
+}
+
+template <typename PoseT>
+std::vector<Key> SwitchableBetweenFactor<PoseT>::keys() const {
+  std::vector<Key> keys = {PoseKey(from_), PoseKey(to_), SwitchKey(switch_)};
+  for (const SwitchId s : coupled_) keys.push_back(SwitchKey(s));
+  return keys;
+}
 
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> SwitchableBetweenFactor<PoseT>::NewCostFunction() const {
+  if (!coupled_.empty()) {
+    return std::unique_ptr<ceres::CostFunction>(CoupledSwitchableRelativePoseCost<PoseT>::Create(
+        mean_, sqrt_information_, function_, static_cast<int>(coupled_.size()) + 1));
+  }
   return std::unique_ptr<ceres::CostFunction>(
       SwitchableRelativePoseCost<PoseT>::Create(mean_, sqrt_information_, function_));
 }
@@ -111,7 +134,11 @@ std::unique_ptr<ceres::CostFunction> SwitchableBetweenFactor<PoseT>::NewCostFunc
 template <typename PoseT>
 std::vector<ParameterBound> SwitchableBetweenFactor<PoseT>::bounds() const {
   if (function_ == SwitchFunction::kSigmoid) return {};
-  return {ParameterBound{SwitchKey(switch_), 0, 0.0, 1.0}};
+  std::vector<ParameterBound> bounds;
+  for (const Key key : keys()) {
+    if (key.type == KeyType::kSwitch) bounds.push_back(ParameterBound{key, 0, 0.0, 1.0});
+  }
+  return bounds;
 }
 
 SwitchPriorFactor::SwitchPriorFactor(SwitchId id, const SwitchPrior& prior)

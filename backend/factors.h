@@ -70,22 +70,25 @@ class BetweenFactor : public Factor {
   RelativePoseCostType cost_;
 };
 
-// r = Psi(s) U e (Suenderhauf & Protzel 2012).
+// r = Psi(s) U e (Suenderhauf & Protzel 2012). With coupled switches s_k
+// (the switches of the closures this one depends on: its parents in the
+// closure hierarchy), r = Psi(s) prod_k Psi(s_k) U e, so that switching a
+// parent off switches the child off in the same solve.
 template <typename PoseT>
 class SwitchableBetweenFactor : public Factor {
  public:
   SwitchableBetweenFactor(PoseId from, PoseId to, SwitchId switch_id,
                           const RelativePoseMeasurement<PoseT>& measurement,
-                          SwitchFunction function = SwitchFunction::kLinear);
-  std::vector<Key> keys() const override {
-    return {PoseKey(from_), PoseKey(to_), SwitchKey(switch_)};
-  }
+                          SwitchFunction function = SwitchFunction::kLinear,
+                          std::vector<SwitchId> coupled = {});
+  std::vector<Key> keys() const override;
   std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
   std::vector<ParameterBound> bounds() const override;
 
  private:
   PoseId from_, to_;
   SwitchId switch_;
+  std::vector<SwitchId> coupled_;
   PoseT mean_;
   Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
   SwitchFunction function_;

@@ -208,6 +208,40 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
   }
 
+  for (const ClosureId id : options.disabled_closures) {
+    if (std::none_of(graph.constraints.begin(), graph.constraints.end(),
+                     [id](const Constraint<PoseT>& c) { return c.id == id; })) {
+      throw std::invalid_argument("disabled_closures: no closure " + std::to_string(id.value()));
+    }
+  }
+  // Closure -> switch, for the coupled switches; the disabled closures' switches.
+  std::map<ClosureId, SwitchId> switch_of;
+  std::set<SwitchId> disabled_switches;
+  for (const auto& c : graph.constraints) {
+    if (!c.switch_id) continue;
+    switch_of.emplace(c.id, *c.switch_id);
+    if (options.disabled_closures.contains(c.id)) {
+      disabled_switches.insert(*c.switch_id);
+      graph.switches.at(*c.switch_id).value = 0.0;
+    }
+  }
+  std::map<ClosureId, std::vector<SwitchId>> coupled_switches;
+  auto switch_of_closure = [&switch_of](ClosureId id) {
+    const auto found = switch_of.find(id);
+    if (found == switch_of.end()) {
+      throw std::invalid_argument("coupled_closures: closure " + std::to_string(id.value()) +
+                                  " has no switch (coupled switches need method switchable)");
+    }
+    return found->second;
+  };
+  for (const auto& [child, others] : options.coupled_closures) {
+    switch_of_closure(child);
+    for (const ClosureId other : others) coupled_switches[child].push_back(switch_of_closure(other));
+  }
+  auto psi = [&options](double s) {
+    return options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
+  };
+
   // The poses and the gauge, shared by the robust solve and the refinement.
   auto add_poses = [&graph](FactorGraph& factors, Values& values,
                             const std::map<PoseId, Vertex<PoseT>>& poses) {
@@ -237,13 +271,17 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     FactorGraph factors;
     add_poses(factors, initial, graph.vertices);
     for (const auto& [id, s] : graph.switches) {
+      if (disabled_switches.contains(id)) continue;
       initial.Insert(id, s.value);
       if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
     }
     for (const auto& c : graph.constraints) {
+      if (options.disabled_closures.contains(c.id)) continue;
       if (c.switch_id) {
-        factors.Emplace<SwitchableBetweenFactor<PoseT>>(c.from, c.to, *c.switch_id,
-                                                        c.measurement, options.switch_function);
+        const auto coupled = coupled_switches.find(c.id);
+        factors.Emplace<SwitchableBetweenFactor<PoseT>>(
+            c.from, c.to, *c.switch_id, c.measurement, options.switch_function,
+            coupled == coupled_switches.end() ? std::vector<SwitchId>{} : coupled->second);
         continue;
       }
       RobustLoss edge_loss = robust(c) ? loss : RobustLoss{};
@@ -258,7 +296,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     solver.max_iterations = std::min(solver.max_iterations, max_iterations);
     OptimizationResult solved = Optimize(factors, initial, solver);
     take_poses(solved.values);
-    for (auto& [id, s] : graph.switches) s.value = solved.values.AtSwitch(id);
+    for (auto& [id, s] : graph.switches) {
+      if (!disabled_switches.contains(id)) s.value = solved.values.AtSwitch(id);
+    }
     return solved.summary;
   };
 
@@ -266,7 +306,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   Summary summary;
   if (options.method == RobustMethod::kGnc) {
     for (const auto& c : graph.constraints) {
-      if (!c.switch_id && robust(c)) gnc_weights[c.id] = 1.0;
+      if (!c.switch_id && robust(c) && !options.disabled_closures.contains(c.id)) gnc_weights[c.id] = 1.0;
     }
     summary = SolveGnc(graph, options, gate, gnc_weights, solve);
   } else {
@@ -276,16 +316,29 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   PoseGraphOptimization out;
   for (const auto& c : graph.constraints) {
     if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
-    ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, true};
-    if (c.switch_id) {
-      const double s = graph.switches.at(*c.switch_id).value;
-      d.weight = options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
+    ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, 1.0, true};
+    bool coupled_on = true;  // every coupled switch above 0.5
+    double own = 1.0;        // the closure's own switch or loss weight
+    if (options.disabled_closures.contains(c.id)) {
+      d.weight = own = 0.0;
+    } else if (c.switch_id) {
+      own = psi(graph.switches.at(*c.switch_id).value);
+      d.weight = own;
+      if (const auto coupled = coupled_switches.find(c.id); coupled != coupled_switches.end()) {
+        for (const SwitchId other : coupled->second) {
+          const double w = psi(graph.switches.at(other).value);
+          coupled_on = coupled_on && w > 0.5;
+          d.weight *= w;
+        }
+      }
     } else if (options.method == RobustMethod::kGnc && robust(c)) {
       d.weight = gnc_weights.at(c.id);
     } else if (robust(c)) {
       d.weight = std::sqrt(LossDerivative(loss, EdgeChi2(graph, c)));
     }
-    d.accepted = d.weight > 0.5;
+    if (!c.switch_id) own = d.weight;
+    d.own_weight = own;
+    d.accepted = own > 0.5 && coupled_on;
     (d.accepted ? out.accepted : out.rejected) += 1;
     out.closures.push_back(d);
   }

@@ -9,7 +9,9 @@
 #ifndef CATGRAPH_BACKEND_POSE_GRAPH_OPTIMIZER_H_
 #define CATGRAPH_BACKEND_POSE_GRAPH_OPTIMIZER_H_
 
+#include <map>
 #include <optional>
+#include <set>
 #include <string_view>
 #include <vector>
 
@@ -72,6 +74,17 @@ struct PoseGraphOptimizerOptions {
   int gnc_max_rounds = 100;  // weighted solves at most; >= 1
   int gnc_round_iterations = 50;  // LM iterations per solve after the first; >= 1
   bool robust_odometry = false;  // also apply the method to odometry
+  // Coupled switches (the closure hierarchy's `coupled` policy): the residual
+  // of closure c is also scaled by the switches of the closures in
+  // coupled_closures[c], so that switching one of them off switches c off
+  // in the same solve. Every closure named must have a switch (method
+  // switchable, or switches in the file). Closure c is then accepted when its
+  // own switch and every coupled switch are above 0.5; its weight is the
+  // product it was scaled by.
+  std::map<ClosureId, std::vector<ClosureId>> coupled_closures;
+  // Closures held off (the closure hierarchy's `cascade` policy): left out of
+  // the solve, reported rejected with weight 0, their switches (if any) at 0.
+  std::set<ClosureId> disabled_closures;
   // After a robust solve (any method but none, or a file with switches), keep
   // its decisions and re-solve the poses by plain least squares without the
   // rejected closures and with the accepted ones at full weight. A rejected
@@ -92,7 +105,11 @@ struct ClosureDecision {
   // for a robust loss (DCS: its scale min(1, 2 Phi / (Phi + chi2))), GNC's
   // final weight; 1 for `none`.
   double weight = 1.0;
-  bool accepted = true;  // weight > 0.5
+  // The closure's own switch or loss weight: `weight` without the coupled
+  // switches (PoseGraphOptimizerOptions::coupled_closures).
+  double own_weight = 1.0;
+  // own_weight > 0.5, and every coupled switch too; false for a disabled closure.
+  bool accepted = true;
 };
 
 struct PoseGraphOptimization {

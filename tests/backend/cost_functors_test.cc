@@ -108,6 +108,45 @@ TEST_CASE("switchable functors: Jacobians including d/ds match, linear and sigmo
   }
 }
 
+TEST_CASE("coupled switchable functor: Jacobians match; residual is the product of the switches times the plain one",
+          "[backend][functor]") {
+  std::mt19937_64 rng(26);
+  ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold> manifold;
+  std::uniform_real_distribution<double> unit(0.1, 0.9);
+  for (SwitchFunction f : {SwitchFunction::kLinear, SwitchFunction::kSigmoid}) {
+    for (int trial = 0; trial < 5; ++trial) {
+      std::array<double, 3> s = {unit(rng), unit(rng), unit(rng)};  // own, two parents
+      const double product = SwitchableRelativePoseCost<Pose2>::Psi(s[0], f) *
+                             SwitchableRelativePoseCost<Pose2>::Psi(s[1], f) *
+                             SwitchableRelativePoseCost<Pose2>::Psi(s[2], f);
+      {
+        const Pose2 xi = RandomPose2(rng), z = RandomPose2(rng);
+        const Pose2 xj = xi * z * Pose2(-0.2, 0.5, -0.3);
+        const Eigen::Matrix3d u = SqrtInformation<3>(RandomInformation<3>(rng));
+        std::unique_ptr<ceres::CostFunction> coupled(CoupledSwitchableRelativePoseCost<Pose2>::Create(z, u, f, 3));
+        std::unique_ptr<ceres::CostFunction> plain(RelativePoseCost<Pose2>::Create(z, u));
+        auto bi = Block(xi), bj = Block(xj);
+        CheckGradients(*coupled, {nullptr, nullptr, nullptr, nullptr, nullptr},
+                       {bi.data(), bj.data(), &s[0], &s[1], &s[2]});
+        Eigen::Vector3d r_coupled, r_plain;
+        const double* coupled_params[] = {bi.data(), bj.data(), &s[0], &s[1], &s[2]};
+        const double* plain_params[] = {bi.data(), bj.data()};
+        REQUIRE(coupled->Evaluate(coupled_params, r_coupled.data(), nullptr));
+        REQUIRE(plain->Evaluate(plain_params, r_plain.data(), nullptr));
+        CHECK((r_coupled - product * r_plain).norm() < 1e-12 * (1.0 + r_plain.norm()));
+      }
+      {
+        const Pose3 xi = RandomPose3(rng), z = RandomPose3(rng);
+        const Pose3 xj = xi * z * Pose3(Eigen::Vector3d(0.3, 0.1, 0.0), Eigen::Quaterniond(1.0, 0.1, 0.0, -0.1));
+        std::unique_ptr<ceres::CostFunction> coupled(CoupledSwitchableRelativePoseCost<Pose3>::Create(
+            z, SqrtInformation<6>(RandomInformation<6>(rng)), f, 2));
+        auto bi = Block(xi), bj = Block(xj);
+        CheckGradients(*coupled, {&manifold, &manifold, nullptr, nullptr}, {bi.data(), bj.data(), &s[0], &s[1]});
+      }
+    }
+  }
+}
+
 TEST_CASE("switch prior and pose prior functors: Jacobians match", "[backend][functor]") {
   std::mt19937_64 rng(24);
   std::unique_ptr<ceres::CostFunction> prior(SwitchPriorCost::Create(1.0, 4.0));
