@@ -26,6 +26,8 @@ void AddVocabularyCommand(CLI::App& app, std::ostream& out);
 void AddLocalizeCommand(CLI::App& app, std::ostream& out);
 void AddInferenceSweepCommand(CLI::App& app, std::ostream& out);
 void AddSadMatchCommand(CLI::App& app, std::ostream& out);
+void AddMapCommand(CLI::App& app, std::ostream& out);
+void AddDemoCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

@@ -1,231 +1,26 @@
 // catgraph localize DATASET [--vocabulary V] -o OUT/ [--particles N] [--seed S]
-#include <array>
-#include <cmath>
-#include <cstdio>
-#include <map>
+#include <algorithm>
 #include <memory>
 #include <sstream>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "apps/commands.h"
-#include "apps/plot/figure.h"
+#include "apps/localization_report.h"
 #include "apps/progress_bar.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
-#include "backend/io/graph_io.h"
 #include "frontend/localization.h"
 
 namespace catgraph {
 namespace {
 
-struct LocalizeCommandOptions {
-  std::string dataset, vocabulary, output;
-  int words = 500, train_every = 0, threads = 0;
-  LocalizationOptions localization;
-  bool quiet = false;
-};
-
-// The default vocabulary: trained on the dataset's first traversal (the map),
-// never on the traversals that are localised against it.
-Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out) {
-  if (!o.vocabulary.empty()) return Vocabulary::Load(o.vocabulary);
-  const int first = d.Traversals().front();
-  std::vector<std::size_t> frames;
-  for (std::size_t i = 0; i < d.frames.size(); ++i) {
-    if (d.frames[i].traversal == first) frames.push_back(i);
-  }
-  // Automatic: about 200 images, every frame of a short traversal.
-  const std::size_t every = o.train_every > 0 ? static_cast<std::size_t>(o.train_every)
-                                              : std::max<std::size_t>(1, frames.size() / 200);
-  std::vector<cv::Mat> images;
-  for (std::size_t k = 0; k < frames.size(); k += every) {
-    const std::size_t i = frames[k];
-    images.push_back(ReadImage(d.ImagePath(i)));
-  }
-  VocabularyOptions options;
-  options.words = o.words;
-  Vocabulary v = TrainVocabulary(images, options);
-  out << "trained a " << v.size() << "-word SIFT vocabulary on " << images.size()
-      << " frames of traversal " << first << "\n";
-  return v;
-}
-
-// The CAT-Graph+ paper's Figs. 7 and 8: the best hypothesis of every frame,
-// and the error of every visual and odometry-inferred closure, against the
-// frame index, with the frames that see a changed region marked.
-plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold) {
-  plot::Figure figure;
-  figure.rows = 2;
-  figure.width_px = 1100;
-  figure.height_px = 800;
-  plot::Series changed{"frames seeing a changed region", {}, {}, plot::SeriesStyle::kSegments,
-                       {0.85, 0.55, 0.1, 0.9}, 4.0};
-  plot::Series hypothesis{"best hypothesis", {}, {}, plot::SeriesStyle::kLine, plot::PaletteColor(1), 0.8};
-  plot::Series closed{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
-  plot::Series error{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
-  plot::Series best_error{"best hypothesis (no closure)", {}, {}, plot::SeriesStyle::kMarkers,
-                          {0.6, 0.6, 0.6, 0.6}, 1.0};
-  for (const auto& h : r.frames) {
-    const double k = h.frame;
-    if (d.frames[static_cast<std::size_t>(h.frame)].changed) {
-      changed.x.insert(changed.x.end(), {k - 0.5, k + 0.5});
-      changed.y.insert(changed.y.end(), {-0.04, -0.04});
-    }
-    hypothesis.x.push_back(k);
-    hypothesis.y.push_back(h.best.value);
-    if (h.closure) {
-      closed.x.push_back(k);
-      closed.y.push_back(h.best.value);
-    }
-    if (std::isnan(h.error_m)) continue;
-    (h.closure ? error : best_error).x.push_back(k);
-    (h.closure ? error : best_error).y.push_back(h.error_m);
-  }
-  plot::Series inferred{"odometry-inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(4), 2.0};
-  for (const auto& c : r.closures) {
-    if (c.kind != ClosureKind::kOdometryInferred || std::isnan(c.error_m)) continue;
-    inferred.x.push_back(c.frame);
-    inferred.y.push_back(c.error_m);
-  }
-  plot::Series t_h{"T_h", {0.0, static_cast<double>(r.frames.size())}, {threshold, threshold},
-                   plot::SeriesStyle::kLine, {0.3, 0.3, 0.3, 1.0}, 1.0, true};
-  plot::Axes top;
-  top.title = "Location hypothesis (Eq 4) per frame";
-  top.x_label = "frame";
-  top.y_label = "hypothesis";
-  top.y_min = -0.08;
-  top.y_max = 1.05;
-  top.series = {changed, hypothesis, t_h, closed};
-  plot::Axes bottom;
-  bottom.title = "Error against ground truth";
-  bottom.x_label = "frame";
-  bottom.y_label = "error (m)";
-  bottom.y_scale = plot::Scale::kSymlog;
-  changed.y.assign(changed.y.size(), 0.0);
-  bottom.series = {changed, best_error, error};
-  if (!inferred.x.empty()) bottom.series.push_back(inferred);
-  figure.axes = {top, bottom};
-  return figure;
-}
-
-std::string Number(double value, const char* format = "%.4f") {
-  if (std::isnan(value)) return "";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, format, value);
-  return buffer;
-}
-
 void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
-  if (o.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
   const Dataset d = ReadDataset(o.dataset);
-  const Vocabulary vocabulary = VocabularyFor(d, o, out);
-  auto features = std::make_shared<ProgressBar>("frames: features");
-  auto filter = std::make_shared<ProgressBar>("frames: filter");
-  if (!o.quiet) {
-    o.localization.on_progress = [features, filter](const char* stage, std::size_t done, std::size_t total) {
-      (std::string(stage) == "features" ? features : filter)->Update(done, total);
-    };
-  }
-  o.localization.threads = o.threads;
-  const LocalizationResult r = Localize(d, vocabulary, o.localization);
-
-  const std::filesystem::path dir(o.output);
-  CreateDirectories(dir, "output directory");
-  WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
-    f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
-         "matched_frame,error_m,inference_pending\n";
-    for (const auto& h : r.frames) {
-      f << h.frame << ',' << h.traversal << ',' << h.edge_from_frame << ',' << h.edge_to_frame << ','
-        << Number(h.best.alpha) << ',' << h.best.direction << ',' << Number(h.best.value) << ','
-        << Number(h.new_place_probability) << ',' << (h.closure ? 1 : 0) << ',' << h.matched_frame << ','
-        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << '\n';
-    }
-  });
-  nlohmann::ordered_json closures = nlohmann::ordered_json::array();
-  for (const auto& c : r.closures) {
-    nlohmann::ordered_json j{{"id", c.id},
-                             {"frame", c.frame},
-                             {"matched_frame", c.matched_frame},
-                             {"kind", c.kind == ClosureKind::kVisual ? "visual" : "inferred"},
-                             {"hypothesis", c.hypothesis},
-                             {"relative_pose", {c.T_frame_matched.x(), c.T_frame_matched.y(), c.T_frame_matched.theta()}}};
-    j["error_m"] = std::isnan(c.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(c.error_m);
-    if (c.kind == ClosureKind::kOdometryInferred) j["parents"] = c.parents;
-    closures.push_back(j);
-  }
-  nlohmann::ordered_json discarded = nlohmann::ordered_json::array();
-  for (const auto& x : r.discarded_inferences) {
-    nlohmann::ordered_json j{{"frame", x.frame},
-                             {"matched_frame", x.matched_frame},
-                             {"reference_closure", x.reference_closure},
-                             {"validating_closure", x.validating_closure}};
-    j["error_m"] = std::isnan(x.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(x.error_m);
-    discarded.push_back(j);
-  }
-  WriteFileAtomically(dir / "discarded_inferences.json", [&](std::ostream& f) { f << discarded.dump(1) << '\n'; });
-  WriteFileAtomically(dir / "closures.json", [&](std::ostream& f) { f << closures.dump(1) << '\n'; });
-  WriteG2oFile(AnyPoseGraph(r.graph), dir / "graph.g2o");
-  const plot::Figure figure = LocalizationFigure(d, r, o.localization.filter.closure_threshold);
-  plot::SaveFigure(figure, dir / "localization.png");
-  plot::SaveFigure(figure, dir / "localization.svg");
-
-  out << "wrote " << o.output << ": " << r.frames.size() << " frames (median " << r.words_per_frame_median
-      << " words per frame)\n";
-  std::vector<bool> inferred_at(d.frames.size(), false);
-  for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
-    double sum = 0.0, worst = 0.0;
-    int count = 0, with_error = 0;
-    for (const auto& c : r.closures) {
-      if (c.kind != kind) continue;
-      ++count;
-      if (kind == ClosureKind::kOdometryInferred) inferred_at[static_cast<std::size_t>(c.frame)] = true;
-      if (std::isnan(c.error_m)) continue;
-      sum += c.error_m;
-      worst = std::max(worst, c.error_m);
-      ++with_error;
-    }
-    out << count << (kind == ClosureKind::kVisual ? " visual closures" : " odometry-inferred closures");
-    if (with_error > 0) {
-      out << ", error mean " << Number(sum / with_error, "%.3f") << " m, max " << Number(worst, "%.3f") << " m";
-    }
-    out << '\n';
-  }
-  if (o.localization.filter.odometric_inference) {
-    out << r.discarded_inferences.size() << " inferences discarded by total-path validation\n";
-  }
-  // Per traversal: how many frames closed, inside and outside the regions
-  // that changed (when the dataset flags them).
-  struct Counts {
-    int frames = 0, visual = 0, inferred = 0;
-  };
-  std::map<int, std::array<Counts, 2>> counts;  // traversal -> outside, inside changed regions
-  for (const auto& h : r.frames) {
-    const auto k = static_cast<std::size_t>(h.frame);
-    Counts& c = counts[h.traversal][d.frames[k].changed ? 1 : 0];
-    ++c.frames;
-    c.visual += h.closure ? 1 : 0;
-    c.inferred += inferred_at[k] ? 1 : 0;
-  }
-  auto describe = [&](const Counts& c) {
-    std::string text = std::to_string(c.visual) + " of " + std::to_string(c.frames) + " frames closed visually (" +
-                       Number(100.0 * c.visual / std::max(1, c.frames), "%.1f") + " %)";
-    if (o.localization.filter.odometric_inference) {
-      text += ", " + std::to_string(c.inferred) + " by inference (" +
-              Number(100.0 * c.inferred / std::max(1, c.frames), "%.1f") + " %)";
-    }
-    return text;
-  };
-  for (const auto& [traversal, c] : counts) {
-    out << "traversal " << traversal << ": ";
-    if (c[1].frames == 0) {
-      out << describe(c[0]) << '\n';
-    } else {
-      out << "outside changed regions " << describe(c[0]) << "; inside " << describe(c[1]) << '\n';
-    }
-  }
+  const LocalizationResult r = RunLocalization(d, o, out);
+  WriteLocalization(o.output, d, r, o.localization.filter.closure_threshold);
+  out << "wrote " << o.output << ": ";
+  PrintLocalizationSummary(d, r, o.localization.filter.odometric_inference, out);
 }
 
 struct InferenceSweepOptions {
@@ -238,7 +33,6 @@ struct InferenceSweepOptions {
 // The CAT-Graph+ paper's Table III: CAT-Graph+ over every (d_tot, d_loc),
 // the features extracted once.
 void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
-  if (o.base.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
   if (!(o.false_threshold_m > 0.0)) throw std::invalid_argument("--false-threshold: expected > 0");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "the sweep needs ground truth (groundtruth.csv)");
@@ -314,7 +108,6 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
 
 void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   auto o = std::make_shared<LocalizeCommandOptions>();
-  CatGraphOptions& f = o->localization.filter;
   CLI::App* cmd = app.add_subcommand(
       "localize",
       "Appearance-based localisation with CAT-Graph: per-frame location hypotheses, visual loop "
@@ -323,34 +116,7 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   cmd->alias("localise");
   cmd->add_option("dataset", o->dataset, "Dataset directory")->required();
   cmd->add_option("-o,--output", o->output, "Output directory")->required();
-  cmd->add_option("--vocabulary", o->vocabulary,
-                  "Vocabulary file (catgraph vocabulary train); default: train one on the first traversal");
-  cmd->add_option("--words", o->words, "Words of the default vocabulary")->capture_default_str();
-  cmd->add_option("--train-every", o->train_every, "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
-      ->capture_default_str();
-  cmd->add_option("--particles", f.num_particles, "n_p")->capture_default_str();
-  cmd->add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
-  cmd->add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
-  cmd->add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
-  cmd->add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
-      ->capture_default_str();
-  cmd->add_option("--new-place-offset", f.new_place_log_offset,
-                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
-      ->capture_default_str();
-  cmd->add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
-                "Let particles onto nodes that dead reckoning rules out");
-  cmd->add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();
-  cmd->add_option("--gate-fraction", f.odometric_gate_fraction, "Odometric gate: fraction of the path since the node")
-      ->capture_default_str();
-  cmd->add_flag("--no-odometric-inference", [&f](std::int64_t) { f.odometric_inference = false; },
-                "CAT-Graph alone: no odometry-inferred closures (CAT-Graph+ is the default)");
-  cmd->add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
-  cmd->add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
-  cmd->add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
-                "The camera sees all round: particles facing either way use the nodes' words");
-  cmd->add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)")->capture_default_str();
-  cmd->add_option("--exclusion-m", f.exclusion_window_m, "Self-match exclusion window (m of path)")->capture_default_str();
-  cmd->add_option("--seed", f.seed, "Filter seed")->capture_default_str();
+  AddLocalizationOptions(*cmd, *o);
   cmd->add_option("--threads", o->threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bars");
   cmd->callback([o, &out] { RunLocalize(*o, out); });

@@ -29,6 +29,8 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddLocalizeCommand(app, out);
   AddInferenceSweepCommand(app, out);
   AddSadMatchCommand(app, out);
+  AddMapCommand(app, out);
+  AddDemoCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

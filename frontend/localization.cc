@@ -49,6 +49,11 @@ LocalizationResult Localize(const Dataset& d, const Vocabulary& vocabulary,
 
 LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
                             const LocalizationOptions& options) {
+  const PoseGraphUncertainty& uncertainty = options.graph_uncertainty;
+  if (!(uncertainty.odometry_m_per_sqrt_m > 0.0 && uncertainty.odometry_rad_per_sqrt_m > 0.0 &&
+        uncertainty.min_distance_m > 0.0 && (uncertainty.closure_sigma.array() > 0.0).all())) {
+    throw std::invalid_argument("Localize: every PoseGraphUncertainty field must be > 0");
+  }
   if (words.size() != d.frames.size()) {
     throw std::invalid_argument("Localize: " + std::to_string(words.size()) + " word sets for " +
                                 std::to_string(d.frames.size()) + " frames");
@@ -66,8 +71,16 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     odometry.push_back(InterpolatePose(d.odometry, f.timestamp_s));
     if (d.HasGroundTruth()) truth.push_back(InterpolatePose(d.ground_truth, f.timestamp_s));
   }
-  const Eigen::Vector3d& s = options.filter.motion_sigma;
-  const Eigen::Matrix3d information = s.cwiseProduct(s).cwiseInverse().asDiagonal();
+  auto information_of = [](const Eigen::Vector3d& sigma) -> Eigen::Matrix3d {
+    return sigma.cwiseProduct(sigma).cwiseInverse().asDiagonal();
+  };
+  const Eigen::Matrix3d closure_information = information_of(uncertainty.closure_sigma);
+  auto odometry_information = [&](const Pose2& step) {
+    const double root_d = std::sqrt(std::max(step.translation().norm(), uncertainty.min_distance_m));
+    return information_of(Eigen::Vector3d(uncertainty.odometry_m_per_sqrt_m, uncertainty.odometry_m_per_sqrt_m,
+                                          uncertainty.odometry_rad_per_sqrt_m) *
+                          root_d);
+  };
   auto frame_of = [&](int node) { return filter.graph().node(node).frame; };
   auto location_error = [&](std::size_t k, const LocationHypothesis& h) {
     if (truth.empty() || h.edge < 0) return kNoError;
@@ -83,7 +96,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     Provenance provenance;
     for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
     result.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
-                                        {c.T_frame_matched, information}, c.kind, provenance, {}, {}});
+                                        {c.T_frame_matched, closure_information}, c.kind, provenance, {}, {}});
   };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
     const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
@@ -104,7 +117,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     if (k > 0) {
       result.graph.constraints.push_back({ClosureId(static_cast<std::int64_t>(result.graph.constraints.size())),
                                           PoseId(static_cast<std::int64_t>(k - 1)), id,
-                                          {u, information}, ClosureKind::kOdometry, {}, {}, {}});
+                                          {u, odometry_information(u)}, ClosureKind::kOdometry, {}, {}, {}});
     }
     if (step.closure) {
       f.closure = true;

@@ -61,30 +61,10 @@ configure_and_build "$build_dir"
 case "$mode" in
   build) ;;
   demo)
-    # The main job until the mapping pipeline lands: simulate a pose graph with
-    # ground truth, spoil it with false loop closures, optimise it robustly,
-    # score it against the truth and draw it.
-    out="$root/out/demo"
-    mkdir -p "$out"
-    catgraph="$build_dir/apps/catgraph"
-    "$catgraph" generate-graph -o "$out/graph.g2o" --truth "$out/truth.g2o" --poses 1000 --seed 1
-    "$catgraph" info "$out/graph.g2o"
-    "$catgraph" inject "$out/graph.g2o" -o "$out/spoiled.g2o" --outliers 100 \
-      --policy local-grouped --seed 1 --labels "$out/labels.csv"
-    "$catgraph" optimize "$out/spoiled.g2o" -o "$out/corrected.g2o" --report "$out/report.json"
-    "$catgraph" evaluate "$out/corrected.g2o" --truth "$out/truth.g2o" --labels "$out/labels.csv"
-    "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.svg" --title "corrected map"
-    "$catgraph" export "$out/corrected.g2o" -o "$out/corrected.png" --title "corrected map"
-    # The office world the mapping pipeline runs on: camera images, wheel
-    # odometry and ground truth, furniture moved before the second traversal.
-    "$catgraph" simulate --scenario office-change -o "$out/office-change" --quiet
-    "$catgraph" plot-dataset "$out/office-change" -o "$out/office-change-plan.png" \
-      --pair-at 16,1.3 --pair-output "$out/office-change-before-after.png"
-    # CAT-Graph on it: visual loop closures, none where the furniture moved.
-    "$catgraph" localize "$out/office-change" -o "$out/localize" --quiet
-    echo "setup: the demo's files are in $out (corrected.svg shows the map and its closures;"
-    echo "       office-change/ is the simulated dataset, office-change-plan.png its floor plan,"
-    echo "       localize/localization.png CAT-Graph's hypothesis and closure error per frame)"
+    # The main job: simulate office-change (furniture moved before the second
+    # traversal) and map it end to end: CAT-Graph and CAT-Graph+ closures,
+    # robust solve with the closure hierarchy, corrected map and pictures.
+    "$build_dir/apps/catgraph" demo -o "$root/out/demo"
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure

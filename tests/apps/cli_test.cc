@@ -1,6 +1,7 @@
 // The `catgraph` command run in process, exactly as main() runs it.
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -8,6 +9,8 @@
 
 #include "tests/catch.h"
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "apps/commands.h"
 #include "apps/sweep.h"
@@ -192,7 +195,7 @@ TEST_CASE("inject writes switchable files and hierarchical parents", "[apps][inj
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("export writes TUM, JSON, DOT, SVG and PNG; edges-only graphs are refused by name",
+TEST_CASE("export writes TUM, JSON, DOT, SVG and PNG, edges-only graphs are refused by name",
           "[apps][export]") {
   const auto dir = testing::TempDir("cli_export");
   const std::string graph = (dir / "graph.g2o").string();
@@ -286,18 +289,33 @@ TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plo
   std::filesystem::remove_all(dir);
 }
 
-// Issues #6 and #7's acceptance on office-change, end to end with the
-// defaults: the vocabulary trained on traversal 1, CAT-Graph+ over both
-// traversals; then the SAD baseline on the same data.
-TEST_CASE("localize on office-change: visual closures outside the changed region, inferred ones inside, none wrong",
-          "[apps][localize][slow]") {
-  const auto dir = testing::TempDir("localize_office_change");
-  REQUIRE(Run({"simulate", "--scenario", "office-change", "-o", (dir / "data").string(), "--quiet"}).status == 0);
-  const Result r = Run({"localize", (dir / "data").string(), "-o", (dir / "out").string(), "--quiet"});
-  INFO(r.out << r.err);
-  REQUIRE(r.status == 0);
-  const Dataset d = ReadDataset(dir / "data");
-  std::ifstream in(dir / "out" / "closures.json");
+// A picture worth looking at: decodes, is large, and is not one flat colour.
+void CheckNonTrivialImage(const std::filesystem::path& path) {
+  INFO(path);
+  const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+  REQUIRE_FALSE(image.empty());
+  CHECK(image.cols >= 800);
+  CHECK(image.rows >= 500);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(image, mean, stddev);
+  CHECK(stddev[0] > 10.0);
+}
+
+// `catgraph demo` end to end (README's first command): it simulates
+// office-change and maps it. On its outputs, issues #6 and #7's acceptance
+// with the defaults (the vocabulary trained on traversal 1, CAT-Graph+ over
+// both traversals), #8's outputs, then the SAD baseline on the same data.
+TEST_CASE("demo on office-change: visual closures outside the changed region, inferred ones inside, none wrong, "
+          "the corrected map",
+          "[apps][localize][map][slow]") {
+  const auto root = testing::TempDir("demo_office_change");
+  const Result demo = Run({"demo", "-o", root.string(), "--quiet"});
+  INFO(demo.out << demo.err);
+  REQUIRE(demo.status == 0);
+  CHECK(demo.out.find("catgraph demo: office-change, 3049 frames") != std::string::npos);
+  const auto data = root / "office-change", out = root / "map";
+  const Dataset d = ReadDataset(data);
+  std::ifstream in(out / "closures.json");
   const auto closures = nlohmann::json::parse(in);
   std::vector<bool> closed(d.frames.size(), false), inferred_at(d.frames.size(), false);
   double sum = 0.0, worst = 0.0, worst_inferred = 0.0, sum_inferred = 0.0;
@@ -344,17 +362,48 @@ TEST_CASE("localize on office-change: visual closures outside the changed region
   CHECK(inside_closed <= 0.1 * inside);  // the paper's Fig. 7: rare where the place changed
   CHECK(worst <= 1.0);
   CHECK(sum / visual <= 0.25);
-  CHECK(std::filesystem::exists(dir / "out" / "hypotheses.csv"));
-  CHECK(std::filesystem::exists(dir / "out" / "graph.g2o"));
-  CHECK(std::filesystem::exists(dir / "out" / "localization.png"));
-  CHECK(std::filesystem::exists(dir / "out" / "discarded_inferences.json"));
+  CHECK(std::filesystem::exists(out / "hypotheses.csv"));
+  CHECK(std::filesystem::exists(out / "graph.g2o"));
+  CHECK(std::filesystem::exists(out / "localization.png"));
+  CHECK(std::filesystem::exists(out / "discarded_inferences.json"));
+
+  // Issue #8: the corrected map and its report.
+  std::ifstream report_in(out / "report.json");
+  const auto report = nlohmann::json::parse(report_in);
+  for (const char* key : {"frames", "method", "hierarchy", "solves", "accepted", "rejected", "closures_by_kind",
+                          "ate_odometry", "ate_corrected", "turned_off", "closures"}) {
+    CHECK(report.contains(key));
+  }
+  REQUIRE(report.at("closures").size() == closures.size());
+  std::map<int, bool> accepted_of;
+  for (const auto& c : report.at("closures")) {
+    for (const char* key : {"id", "kind", "frame", "matched_frame", "switch", "weight", "accepted", "error_m"}) {
+      CHECK(c.contains(key));
+    }
+    accepted_of[c.at("id").get<int>()] = c.at("accepted").get<bool>();
+  }
+  // Cascade: no accepted child of a rejected parent.
+  for (const auto& c : report.at("closures")) {
+    if (c.at("kind") != "inferred" || !c.at("accepted").get<bool>()) continue;
+    for (const auto& parent : c.at("parents")) CHECK(accepted_of.at(parent.get<int>()));
+  }
+  // The map is better than odometry alone, and close to the truth.
+  const double ate_odometry = report.at("ate_odometry").at("rmse_m").get<double>();
+  const double ate_corrected = report.at("ate_corrected").at("rmse_m").get<double>();
+  CHECK(ate_corrected < 0.25 * ate_odometry);
+  CHECK(ate_corrected < 0.25);
+  for (const char* file : {"corrected.g2o", "corrected_accepted.g2o", "trajectory.tum", "index.html", "map.svg"}) {
+    CHECK(std::filesystem::exists(out / file));
+  }
+  CheckNonTrivialImage(out / "map.png");
+  CheckNonTrivialImage(out / "localization.png");
 
   // The baseline on the same data: its best threshold admits no false match
   // and almost nothing where the furniture moved.
-  const Result sad = Run({"sad-match", (dir / "data").string(), "-o", (dir / "sad").string()});
+  const Result sad = Run({"sad-match", data.string(), "-o", (root / "sad").string()});
   INFO(sad.out << sad.err);
   REQUIRE(sad.status == 0);
-  std::ifstream matches(dir / "sad" / "matches.csv");
+  std::ifstream matches(root / "sad" / "matches.csv");
   std::string line;
   std::getline(matches, line);
   CHECK(line == "query_frame,template_frame,difference,shift_px,error_m,changed,accepted");
@@ -372,7 +421,8 @@ TEST_CASE("localize on office-change: visual closures outside the changed region
   }
   CHECK(accepted > 0);
   CHECK(accepted_changed <= 0.1 * changed_queries);
-  CHECK(std::filesystem::exists(dir / "sad" / "sad.png"));
+  CHECK(std::filesystem::exists(root / "sad" / "sad.png"));
+  std::filesystem::remove_all(root);
 }
 
 }  // namespace

@@ -62,7 +62,7 @@ TEST_CASE("the grid is the full product in a fixed order and shards partition it
   CHECK_THROWS(ParseShard("1/3x"));
 }
 
-TEST_CASE("YAML and JSON configurations read alike; unknown keys are errors",
+TEST_CASE("YAML and JSON configurations read alike, unknown keys are errors",
           "[apps][sweep][bad-input]") {
   const auto dir = testing::TempDir("sweep_config");
   std::ofstream(dir / "c.yaml") << "output: out.csv\ndatasets:\n  - name: m\n    graph: g.g2o\n"

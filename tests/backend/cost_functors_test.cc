@@ -108,7 +108,7 @@ TEST_CASE("switchable functors: Jacobians including d/ds match, linear and sigmo
   }
 }
 
-TEST_CASE("coupled switchable functor: Jacobians match; residual is the product of the switches times the plain one",
+TEST_CASE("coupled switchable functor: Jacobians match, residual is the product of the switches times the plain one",
           "[backend][functor]") {
   std::mt19937_64 rng(26);
   ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold> manifold;

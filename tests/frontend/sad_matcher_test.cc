@@ -44,7 +44,7 @@ TEST_CASE("SAD: a sideways shift is found and only the overlap counts", "[fronte
   CHECK_THROWS_AS(CompareTemplates(query, cv::Mat(8, 15, CV_32F), 2), std::invalid_argument);
 }
 
-TEST_CASE("SAD templates: area-averaged grey in [0, 1]; normalised flat patches are 0.5", "[frontend][sad]") {
+TEST_CASE("SAD templates: area-averaged grey in [0, 1], normalised flat patches are 0.5", "[frontend][sad]") {
   cv::Mat image(80, 160, CV_8UC3, cv::Scalar(51, 51, 51));
   image(cv::Rect(0, 0, 80, 80)).setTo(cv::Scalar(255, 255, 255));
   SadOptions o;

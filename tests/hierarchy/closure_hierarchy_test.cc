@@ -128,7 +128,7 @@ std::set<ClosureId> Accepted(const HierarchicalOptimization& r) {
   return ids;
 }
 
-TEST_CASE("cascade and coupled turn off the children of rejected false parents; flat lets them survive",
+TEST_CASE("cascade and coupled turn off the children of rejected false parents, flat lets them survive",
           "[hierarchy][optimizer]") {
   const Scenario s = MakeScenario();
   const ClosureHierarchy h = ClosureHierarchy::FromGraph(s.graph);
@@ -192,7 +192,7 @@ TEST_CASE("cascade and coupled turn off the children of rejected false parents; 
   CHECK(Accepted(results[HierarchyPolicy::kCascade]) == Accepted(results[HierarchyPolicy::kCoupled]));
 }
 
-TEST_CASE("coupled needs switches; bad options are refused", "[hierarchy]") {
+TEST_CASE("coupled needs switches, bad options are refused", "[hierarchy]") {
   const Scenario s = MakeScenario();
   const ClosureHierarchy h = ClosureHierarchy::FromGraph(s.graph);
   PoseGraphOptimizerOptions dcs;

@@ -1,0 +1,64 @@
+// The front-end stage of the command line, shared by `catgraph localize`,
+// `inference-sweep` and `map`: its options, the default vocabulary, the
+// filter run with progress bars, and what it writes (hypotheses.csv,
+// closures.json, discarded_inferences.json, graph.g2o, localization.png/svg)
+// and prints. docs/cli.md documents the files.
+#ifndef CATGRAPH_APPS_LOCALIZATION_REPORT_H_
+#define CATGRAPH_APPS_LOCALIZATION_REPORT_H_
+
+#include <filesystem>
+#include <ostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "apps/plot/figure.h"
+#include "backend/io/dataset.h"
+#include "frontend/localization.h"
+
+namespace catgraph {
+
+struct LocalizeCommandOptions {
+  std::string dataset, vocabulary, output;
+  int words = 500, train_every = 0, threads = 0;
+  LocalizationOptions localization;
+  bool quiet = false;
+};
+
+// The vocabulary and filter options of `localize` (and `map`) on `cmd`.
+void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o);
+
+// `o.vocabulary` if given; otherwise one trained on about 200 frames (or
+// every `o.train_every`-th) of the dataset's first traversal, the map, never
+// on the traversals localised against it.
+Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out);
+
+// The vocabulary, then CAT-Graph (and CAT-Graph+) over the dataset with
+// progress bars unless `o.quiet`.
+LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
+
+// The CAT-Graph+ paper's Figs. 7, 8 and 11: the hypothesis per frame, and
+// the error of every closure per frame.
+plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold);
+
+// One closures.json entry: id, frame, matched_frame, kind, hypothesis,
+// relative_pose, error_m, and parents for inferred closures.
+nlohmann::ordered_json ClosureJson(const LoopClosure& closure);
+
+// hypotheses.csv, closures.json, discarded_inferences.json, graph.g2o and
+// localization.png/svg in `dir` (created), each written atomically.
+void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const LocalizationResult& r,
+                       double closure_threshold);
+
+// Closures by kind with their errors, and per traversal how many frames
+// closed inside and outside the changed regions.
+void PrintLocalizationSummary(const Dataset& d, const LocalizationResult& r, bool odometric_inference,
+                              std::ostream& out);
+
+// `value` with printf's `format`; empty for NaN.
+std::string Number(double value, const char* format = "%.4f");
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_APPS_LOCALIZATION_REPORT_H_

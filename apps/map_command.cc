@@ -1,0 +1,326 @@
+// catgraph map DATASET -o OUT/ [--hierarchy cascade|coupled|flat] [--method M]
+//
+// The whole pipeline: vocabulary, CAT-Graph and CAT-Graph+, the pose graph
+// (odometry, visual and inferred closures), the robust solve under the
+// closure hierarchy, then the corrected graph, the trajectory, report.json,
+// the CAT-Graph+ paper's figures and an index.html. docs/mapping.md.
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "apps/localization_report.h"
+#include "apps/plot/figure.h"
+#include "backend/evaluation.h"
+#include "backend/graph/trajectory.h"
+#include "backend/io/atomic_file.h"
+#include "backend/io/dataset.h"
+#include "backend/io/graph_io.h"
+#include "backend/io/trajectory_io.h"
+#include "backend/pose_graph_optimizer.h"
+#include "hierarchy/closure_hierarchy.h"
+
+namespace catgraph {
+namespace {
+
+struct MapCommandOptions {
+  LocalizeCommandOptions front;
+  std::string method = "switchable";
+  std::string hierarchy = "cascade";
+  PoseGraphOptimizerOptions optimizer;
+};
+
+// Ground truth at every frame (vertex id = frame index); empty without truth.
+Trajectory2 TruthAtFrames(const Dataset& d) {
+  Trajectory2 truth;
+  if (!d.HasGroundTruth()) return truth;
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    truth.emplace(PoseId(static_cast<PoseId::ValueType>(i)), InterpolatePose(d.ground_truth, d.frames[i].timestamp_s));
+  }
+  return truth;
+}
+
+// `estimate` moved so that its first pose is the truth's first pose, for
+// drawing both in one frame; unchanged without truth.
+Trajectory2 Anchored(const Trajectory2& estimate, const Trajectory2& truth) {
+  if (truth.empty() || estimate.empty()) return estimate;
+  const Pose2 move = truth.begin()->second * estimate.begin()->second.Inverse();
+  Trajectory2 anchored;
+  for (const auto& [id, pose] : estimate) anchored.emplace_hint(anchored.end(), id, move * pose);
+  return anchored;
+}
+
+plot::Series Path(const std::string& label, const Trajectory2& poses, plot::Color color, double width) {
+  plot::Series s{label, {}, {}, plot::SeriesStyle::kLine, color, width};
+  for (const auto& [id, p] : poses) {
+    s.x.push_back(p.x());
+    s.y.push_back(p.y());
+  }
+  return s;
+}
+
+// The CAT-Graph+ paper's Fig. 10: odometry alone beside the corrected map,
+// with the accepted visual closures as solid red lines and the accepted
+// inferred ones dashed black; rejected closures faint. Both anchored at the
+// first true pose, over the floor plan when the dataset has one.
+plot::Figure MapFigure(const Dataset& d, const PoseGraph2& front, const PoseGraph2& corrected,
+                       const std::vector<ClosureDecision>& decisions, const Trajectory2& truth) {
+  plot::Series walls{"", {}, {}, plot::SeriesStyle::kSegments, {0.55, 0.55, 0.55, 1.0}, 0.6};
+  for (const auto& w : d.meta.walls) {
+    walls.x.insert(walls.x.end(), {w[0], w[2]});
+    walls.y.insert(walls.y.end(), {w[1], w[3]});
+  }
+  plot::Series truth_path = Path("ground truth", truth, {0.2, 0.6, 0.2, 0.6}, 0.8);
+  auto panel = [&](const std::string& title, const Trajectory2& poses, bool closures) {
+    plot::Axes axes;
+    axes.title = title;
+    axes.x_label = "x (m)";
+    axes.y_label = "y (m)";
+    axes.equal_aspect = true;
+    if (!walls.x.empty()) axes.series.push_back(walls);
+    if (!truth.empty()) axes.series.push_back(truth_path);
+    axes.series.push_back(Path("trajectory", poses, {0.0, 0.45, 0.70, 1.0}, 1.2));
+    if (!closures) return axes;
+    plot::Series visual{"visual closure", {}, {}, plot::SeriesStyle::kSegments, {0.84, 0.1, 0.1, 0.9}, 0.8};
+    plot::Series inferred{"inferred closure", {}, {}, plot::SeriesStyle::kSegments, {0.0, 0.0, 0.0, 0.9}, 0.8, true};
+    plot::Series rejected{"rejected closure", {}, {}, plot::SeriesStyle::kSegments, {0.9, 0.6, 0.0, 0.5}, 0.6, true};
+    for (const ClosureDecision& c : decisions) {
+      plot::Series& s = !c.accepted ? rejected : c.kind == ClosureKind::kOdometryInferred ? inferred : visual;
+      const Pose2& a = poses.at(c.from);
+      const Pose2& b = poses.at(c.to);
+      s.x.insert(s.x.end(), {a.x(), b.x()});
+      s.y.insert(s.y.end(), {a.y(), b.y()});
+    }
+    for (plot::Series* s : {&rejected, &visual, &inferred}) {
+      s->label += " (" + std::to_string(s->x.size() / 2) + ")";
+      axes.series.push_back(*s);
+    }
+    return axes;
+  };
+  plot::Figure figure;
+  figure.cols = 2;
+  figure.width_px = 1800;
+  figure.height_px = 900;
+  figure.axes = {panel("odometry alone", Anchored(TrajectoryOf(front), truth), false),
+                 panel("corrected map", Anchored(TrajectoryOf(corrected), truth), true)};
+  return figure;
+}
+
+nlohmann::ordered_json AteJson(const std::optional<TrajectoryEvaluation>& e) {
+  if (!e) return nullptr;
+  return {{"rmse_m", e->ate_m.rmse}, {"mean_m", e->ate_m.mean}, {"median_m", e->ate_m.median},
+          {"max_m", e->ate_m.max}, {"rmse_anchored_m", e->rmse_anchored_m}};
+}
+
+std::string HtmlEscape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+void RunMap(MapCommandOptions& o, std::ostream& out) {
+  PoseGraphOptimizerOptions optimizer = o.optimizer;
+  optimizer.method = *RobustMethodFromString(o.method);
+  HierarchyOptions hierarchy_options;
+  hierarchy_options.policy = *HierarchyPolicyFromString(o.hierarchy);
+  if (hierarchy_options.policy == HierarchyPolicy::kCoupled && optimizer.method != RobustMethod::kSwitchable) {
+    throw std::invalid_argument("--hierarchy coupled needs --method switchable (it couples switches)");
+  }
+  Validate(optimizer);
+  const Dataset d = ReadDataset(o.front.dataset);
+  const std::filesystem::path dir(o.front.output);
+  CreateDirectories(dir, "output directory");
+
+  out << "[1/3] front end: CAT-Graph" << (o.front.localization.filter.odometric_inference ? "+" : "") << " on "
+      << d.frames.size() << " frames\n";
+  const LocalizationResult r = RunLocalization(d, o.front, out);
+  WriteLocalization(dir, d, r, o.front.localization.filter.closure_threshold);
+  PrintLocalizationSummary(d, r, o.front.localization.filter.odometric_inference, out);
+
+  out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on " << r.graph.vertices.size()
+      << " poses and " << r.closures.size() << " closures\n";
+  const AnyPoseGraph front_graph(r.graph);
+  const ClosureHierarchy hierarchy = ClosureHierarchy::FromGraph(front_graph);
+  const HierarchicalOptimization solved = OptimizeWithHierarchy(front_graph, hierarchy, optimizer, hierarchy_options);
+  const PoseGraphOptimization& result = solved.optimization;
+  if (!result.summary.IsUsable()) throw std::runtime_error("the solver failed: " + result.summary.message);
+  const PoseGraph2& corrected = std::get<PoseGraph2>(result.graph);
+  out << solved.solves << (solved.solves == 1 ? " solve" : " solves") << " in " << Number(solved.time_s, "%.2f")
+      << " s; " << result.accepted << " closures accepted, " << result.rejected << " rejected";
+  if (hierarchy_options.policy == HierarchyPolicy::kFlat) {
+    out << "; " << solved.surviving_children.size() << " children of rejected parents survive\n";
+  } else {
+    out << " (" << solved.turned_off.size() << " turned off by the hierarchy)\n";
+  }
+
+  out << "[3/3] outputs\n";
+  const Trajectory2 truth = TruthAtFrames(d);
+  std::optional<TrajectoryEvaluation> ate_odometry, ate_corrected;
+  if (!truth.empty()) {
+    ate_odometry = EvaluateTrajectory(TrajectoryOf(r.graph), truth);
+    ate_corrected = EvaluateTrajectory(TrajectoryOf(corrected), truth);
+  }
+  WriteG2oFile(result.graph, dir / "corrected.g2o");
+  WriteG2oFile(DropRejected(result.graph, result.closures), dir / "corrected_accepted.g2o");
+  WriteTumFile(AnyTrajectory(TrajectoryOf(corrected)), dir / "trajectory.tum");
+
+  // report.json: the headline numbers, then every closure.
+  std::map<ClosureId, const ClosureDecision*> decision_of;
+  for (const ClosureDecision& c : result.closures) decision_of[c.id] = &c;
+  std::map<ClosureId, SwitchId> switch_of;
+  for (const auto& c : corrected.constraints) {
+    if (c.switch_id) switch_of.emplace(c.id, *c.switch_id);
+  }
+  std::map<ClosureId, ClosureId> turned_off_by;
+  for (const HierarchyDecision& h : solved.turned_off) turned_off_by[h.child] = h.parent;
+  struct KindCounts {
+    int count = 0, accepted = 0;
+    std::vector<double> errors, accepted_errors;
+  };
+  std::map<ClosureKind, KindCounts> by_kind;
+  nlohmann::ordered_json closures = nlohmann::ordered_json::array();
+  for (const LoopClosure& c : r.closures) {
+    const ClosureDecision& decision = *decision_of.at(ClosureId(c.id));
+    nlohmann::ordered_json j = ClosureJson(c);
+    const auto switch_id = switch_of.find(decision.id);
+    j["switch"] = switch_id == switch_of.end() ? nlohmann::ordered_json()
+                                               : nlohmann::ordered_json(corrected.switches.at(switch_id->second).value);
+    j["weight"] = decision.weight;
+    j["accepted"] = decision.accepted;
+    const auto off = turned_off_by.find(decision.id);
+    j["turned_off_by"] = off == turned_off_by.end() ? nlohmann::ordered_json() : nlohmann::ordered_json(off->second.value());
+    closures.push_back(j);
+    KindCounts& k = by_kind[c.kind];
+    ++k.count;
+    k.accepted += decision.accepted ? 1 : 0;
+    if (!std::isnan(c.error_m)) {
+      k.errors.push_back(c.error_m);
+      if (decision.accepted) k.accepted_errors.push_back(c.error_m);
+    }
+  }
+  // null when there is nothing to measure (no ground truth, no closure).
+  auto optional_number = [](bool present, double value) {
+    return present ? nlohmann::ordered_json(value) : nlohmann::ordered_json();
+  };
+  nlohmann::ordered_json kinds = nlohmann::ordered_json::object();
+  for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
+    const KindCounts& k = by_kind[kind];
+    const ErrorStatistics all = StatisticsOf(k.errors), kept = StatisticsOf(k.accepted_errors);
+    kinds[std::string(ToString(kind))] = {
+        {"count", k.count},
+        {"accepted", k.accepted},
+        {"rejected", k.count - k.accepted},
+        {"error_mean_m", optional_number(!k.errors.empty(), all.mean)},
+        {"error_max_m", optional_number(!k.errors.empty(), all.max)},
+        {"accepted_error_max_m", optional_number(!k.accepted_errors.empty(), kept.max)}};
+  }
+  auto decisions_json = [](const std::vector<HierarchyDecision>& list) {
+    nlohmann::ordered_json a = nlohmann::ordered_json::array();
+    for (const HierarchyDecision& h : list) {
+      a.push_back({{"child", h.child.value()}, {"parent", h.parent.value()}, {"round", h.round}});
+    }
+    return a;
+  };
+  nlohmann::ordered_json report{{"dataset", o.front.dataset},
+                                {"frames", d.frames.size()},
+                                {"method", o.method},
+                                {"hierarchy", o.hierarchy},
+                                {"odometric_inference", o.front.localization.filter.odometric_inference},
+                                {"solves", solved.solves},
+                                {"time_s", solved.time_s},
+                                {"iterations", result.summary.iterations},
+                                {"chi2", result.chi2},
+                                {"accepted", result.accepted},
+                                {"rejected", result.rejected},
+                                {"closures_by_kind", kinds},
+                                {"ate_odometry", AteJson(ate_odometry)},
+                                {"ate_corrected", AteJson(ate_corrected)},
+                                {"turned_off", decisions_json(solved.turned_off)},
+                                {"surviving_children", decisions_json(solved.surviving_children)},
+                                {"closures", closures}};
+  WriteFileAtomically(dir / "report.json", [&](std::ostream& f) { f << report.dump(1) << '\n'; });
+
+  const plot::Figure map = MapFigure(d, r.graph, corrected, result.closures, truth);
+  plot::SaveFigure(map, dir / "map.png");
+  plot::SaveFigure(map, dir / "map.svg");
+
+  // index.html: the pictures and the headline numbers.
+  std::ostringstream headline;
+  for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
+    const KindCounts& k = by_kind[kind];
+    headline << "<tr><td>" << ToString(kind) << " closures</td><td>" << k.count << " (" << k.accepted
+             << " accepted)";
+    if (!k.errors.empty()) {
+      headline << ", error mean " << Number(StatisticsOf(k.errors).mean, "%.3f") << " m, max "
+               << Number(StatisticsOf(k.errors).max, "%.3f") << " m";
+    }
+    headline << "</td></tr>\n";
+  }
+  headline << "<tr><td>turned off by the hierarchy</td><td>" << solved.turned_off.size() << "</td></tr>\n";
+  if (ate_odometry) {
+    headline << "<tr><td>ATE (RMSE, aligned)</td><td>odometry " << Number(ate_odometry->ate_m.rmse, "%.3f")
+             << " m &rarr; corrected " << Number(ate_corrected->ate_m.rmse, "%.3f") << " m</td></tr>\n";
+  }
+  WriteFileAtomically(dir / "index.html", [&](std::ostream& f) {
+    f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>catgraph map: "
+      << HtmlEscape(o.front.dataset) << "</title>\n<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
+      << "img{max-width:100%}td{padding:2px 12px}</style></head><body>\n<h1>catgraph map</h1>\n<p>"
+      << HtmlEscape(o.front.dataset) << ": " << d.frames.size() << " frames; " << HtmlEscape(o.method)
+      << " back end, " << HtmlEscape(o.hierarchy) << " hierarchy.</p>\n<table>\n" << headline.str() << "</table>\n"
+      << "<h2>Map (Fig. 10)</h2>\n<img src=\"map.svg\" alt=\"odometry alone and the corrected map\">\n"
+      << "<h2>Hypothesis and closure error per frame (Figs. 7, 8, 11)</h2>\n"
+      << "<img src=\"localization.svg\" alt=\"hypothesis and closure error per frame\">\n"
+      << "<p>Files: corrected.g2o (with switches), corrected_accepted.g2o (rejected closures removed), "
+      << "trajectory.tum, report.json, closures.json, hypotheses.csv, graph.g2o (the front end's graph).</p>\n"
+      << "</body></html>\n";
+  });
+
+  if (ate_odometry) {
+    out << "ATE (RMSE after alignment): odometry " << Number(ate_odometry->ate_m.rmse, "%.3f") << " m, corrected map "
+        << Number(ate_corrected->ate_m.rmse, "%.3f") << " m\n";
+  }
+  out << "wrote " << o.front.output
+      << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum, report.json, map.png/svg, "
+         "localization.png/svg, index.html\n";
+}
+
+}  // namespace
+
+void AddMapCommand(CLI::App& app, std::ostream& out) {
+  auto o = std::make_shared<MapCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "map",
+      "The whole pipeline on a dataset: CAT-Graph and CAT-Graph+ closures, robust pose-graph solve with the "
+      "closure hierarchy, corrected graph (g2o, TUM), report.json, figures and index.html. docs/mapping.md.");
+  cmd->add_option("dataset", o->front.dataset, "Dataset directory")->required();
+  cmd->add_option("-o,--output", o->front.output, "Output directory")->required();
+  cmd->add_option("--hierarchy", o->hierarchy,
+                  "cascade: turn off the children of rejected visual closures and re-solve; coupled: scale each "
+                  "child by its parents' switches in one solve; flat: plain switchable constraints")
+      ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
+      ->capture_default_str();
+  cmd->add_option("--method", o->method, "Robust method for loop closures (as catgraph optimize)")
+      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
+      ->capture_default_str();
+  AddLocalizationOptions(*cmd, o->front);
+  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_flag("--quiet", o->front.quiet, "No progress bars");
+  cmd->callback([o, &out] { RunMap(*o, out); });
+}
+
+}  // namespace catgraph
