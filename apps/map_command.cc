@@ -40,10 +40,8 @@ struct MapCommandOptions {
 // Ground truth at every frame (vertex id = frame index); empty without truth.
 Trajectory2 TruthAtFrames(const Dataset& d) {
   Trajectory2 truth;
-  if (!d.HasGroundTruth()) return truth;
-  for (std::size_t i = 0; i < d.frames.size(); ++i) {
-    truth.emplace(PoseId(static_cast<PoseId::ValueType>(i)), InterpolatePose(d.ground_truth, d.frames[i].timestamp_s));
-  }
+  PoseId::ValueType frame = 0;
+  for (const Pose2& pose : PosesAtFrames(d, d.ground_truth)) truth.emplace_hint(truth.end(), PoseId(frame++), pose);
   return truth;
 }
 
@@ -191,6 +189,11 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   struct KindCounts {
     int count = 0, accepted = 0;
     std::vector<double> errors, accepted_errors;
+    ErrorStatistics all, kept;  // of errors and accepted_errors
+  };
+  // null when there is nothing to give (no switch, no ground truth, ...).
+  auto optional_number = [](bool present, double value) {
+    return present ? nlohmann::ordered_json(value) : nlohmann::ordered_json();
   };
   std::map<ClosureKind, KindCounts> by_kind;
   nlohmann::ordered_json closures = nlohmann::ordered_json::array();
@@ -213,21 +216,18 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
       if (decision.accepted) k.accepted_errors.push_back(c.error_m);
     }
   }
-  // null when there is nothing to measure (no ground truth, no closure).
-  auto optional_number = [](bool present, double value) {
-    return present ? nlohmann::ordered_json(value) : nlohmann::ordered_json();
-  };
   nlohmann::ordered_json kinds = nlohmann::ordered_json::object();
   for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
-    const KindCounts& k = by_kind[kind];
-    const ErrorStatistics all = StatisticsOf(k.errors), kept = StatisticsOf(k.accepted_errors);
+    KindCounts& k = by_kind[kind];
+    k.all = StatisticsOf(k.errors);
+    k.kept = StatisticsOf(k.accepted_errors);
     kinds[std::string(ToString(kind))] = {
         {"count", k.count},
         {"accepted", k.accepted},
         {"rejected", k.count - k.accepted},
-        {"error_mean_m", optional_number(!k.errors.empty(), all.mean)},
-        {"error_max_m", optional_number(!k.errors.empty(), all.max)},
-        {"accepted_error_max_m", optional_number(!k.accepted_errors.empty(), kept.max)}};
+        {"error_mean_m", optional_number(!k.errors.empty(), k.all.mean)},
+        {"error_max_m", optional_number(!k.errors.empty(), k.all.max)},
+        {"accepted_error_max_m", optional_number(!k.accepted_errors.empty(), k.kept.max)}};
   }
   auto decisions_json = [](const std::vector<HierarchyDecision>& list) {
     nlohmann::ordered_json a = nlohmann::ordered_json::array();
@@ -266,8 +266,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     headline << "<tr><td>" << ToString(kind) << " closures</td><td>" << k.count << " (" << k.accepted
              << " accepted)";
     if (!k.errors.empty()) {
-      headline << ", error mean " << Number(StatisticsOf(k.errors).mean, "%.3f") << " m, max "
-               << Number(StatisticsOf(k.errors).max, "%.3f") << " m";
+      headline << ", error mean " << Number(k.all.mean, "%.3f") << " m, max " << Number(k.all.max, "%.3f") << " m";
     }
     headline << "</td></tr>\n";
   }

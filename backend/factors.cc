@@ -1,7 +1,7 @@
 #include "backend/factors.h"
 
-#include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -104,11 +104,10 @@ SwitchableBetweenFactor<PoseT>::SwitchableBetweenFactor(
       mean_(measurement.mean),
       sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
       function_(function) {
-  for (std::size_t k = 0; k < coupled_.size(); ++k) {
-    if (coupled_[k] == switch_ ||
-        std::find(coupled_.begin(), coupled_.begin() + static_cast<std::ptrdiff_t>(k), coupled_[k]) !=
-            coupled_.begin() + static_cast<std::ptrdiff_t>(k)) {
-      throw std::invalid_argument("SwitchableBetweenFactor: switch " + std::to_string(coupled_[k].value()) +
+  std::set<SwitchId> seen = {switch_};
+  for (const SwitchId s : coupled_) {
+    if (!seen.insert(s).second) {
+      throw std::invalid_argument("SwitchableBetweenFactor: switch " + std::to_string(s.value()) +
                                   " appears twice among the constraint's switches");
     }
   }

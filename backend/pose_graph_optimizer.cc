@@ -208,22 +208,24 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
   }
 
-  for (const ClosureId id : options.disabled_closures) {
-    if (std::none_of(graph.constraints.begin(), graph.constraints.end(),
-                     [id](const Constraint<PoseT>& c) { return c.id == id; })) {
-      throw std::invalid_argument("disabled_closures: no closure " + std::to_string(id.value()));
-    }
-  }
   // Closure -> switch, for the coupled switches; the disabled closures' switches.
   std::map<ClosureId, SwitchId> switch_of;
   std::set<SwitchId> disabled_switches;
+  std::size_t disabled_found = 0;
   for (const auto& c : graph.constraints) {
+    const bool disabled = options.disabled_closures.contains(c.id);
+    disabled_found += disabled ? 1 : 0;
     if (!c.switch_id) continue;
     switch_of.emplace(c.id, *c.switch_id);
-    if (options.disabled_closures.contains(c.id)) {
+    if (disabled) {
       disabled_switches.insert(*c.switch_id);
       graph.switches.at(*c.switch_id).value = 0.0;
     }
+  }
+  if (disabled_found != options.disabled_closures.size()) {
+    throw std::invalid_argument("disabled_closures: " +
+                                std::to_string(options.disabled_closures.size() - disabled_found) +
+                                " of them are not closures of the graph");
   }
   std::map<ClosureId, std::vector<SwitchId>> coupled_switches;
   auto switch_of_closure = [&switch_of](ClosureId id) {

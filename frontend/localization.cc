@@ -66,11 +66,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   result.words_per_frame_median = sizes.empty() ? 0 : sizes[sizes.size() / 2];
 
   // Odometry and (when present) ground truth at the frame times.
-  std::vector<Pose2> odometry, truth;
-  for (const auto& f : d.frames) {
-    odometry.push_back(InterpolatePose(d.odometry, f.timestamp_s));
-    if (d.HasGroundTruth()) truth.push_back(InterpolatePose(d.ground_truth, f.timestamp_s));
-  }
+  const std::vector<Pose2> odometry = PosesAtFrames(d, d.odometry), truth = PosesAtFrames(d, d.ground_truth);
   auto information_of = [](const Eigen::Vector3d& sigma) -> Eigen::Matrix3d {
     return sigma.cwiseProduct(sigma).cwiseInverse().asDiagonal();
   };

@@ -22,8 +22,9 @@ std::map<ClosureId, bool> OwnAcceptance(const std::vector<ClosureDecision>& deci
   return accepted;
 }
 
-// Turns the children the hierarchy switched off off in the result too: switch
-// 0 in the graph (if it has one), rejected in the decisions.
+// Applies the hierarchy's decisions to the last solve's result: each child
+// turned off gets switch 0 in the graph (if it has a switch) and is rejected
+// in the decisions.
 void MarkTurnedOff(PoseGraphOptimization& r, const std::vector<HierarchyDecision>& turned_off) {
   std::set<ClosureId> off;
   for (const HierarchyDecision& d : turned_off) off.insert(d.child);
@@ -171,17 +172,12 @@ HierarchicalOptimization OptimizeWithHierarchy(const AnyPoseGraph& graph, const 
         out.optimization = solve();
         std::vector<HierarchyDecision> decided =
             PropagateRejections(hierarchy, OwnAcceptance(out.optimization.closures), o.disabled_closures);
-        if (decided.empty() || round == hierarchy_options.max_rounds) {
-          // At the round limit the last decisions stand without a re-solve.
-          for (HierarchyDecision& d : decided) d.round = round;
-          out.turned_off.insert(out.turned_off.end(), decided.begin(), decided.end());
-          break;
-        }
-        for (HierarchyDecision& d : decided) {
-          d.round = round;
-          o.disabled_closures.insert(d.child);
-        }
+        for (HierarchyDecision& d : decided) d.round = round;
         out.turned_off.insert(out.turned_off.end(), decided.begin(), decided.end());
+        // At the round limit the last decisions stand without a re-solve
+        // (MarkTurnedOff below applies them to the result).
+        if (decided.empty() || round == hierarchy_options.max_rounds) break;
+        for (const HierarchyDecision& d : decided) o.disabled_closures.insert(d.child);
       }
       break;
     }

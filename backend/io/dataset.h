@@ -110,6 +110,10 @@ void WriteDatasetTables(const Dataset& dataset);
 // samples' time range; `poses` must be sorted by time.
 Pose2 InterpolatePose(const std::vector<TimedPose2>& poses, double t);
 
+// `poses` (odometry or ground truth) at every frame time of `dataset`, in
+// frame order; empty when `poses` is.
+std::vector<Pose2> PosesAtFrames(const Dataset& dataset, const std::vector<TimedPose2>& poses);
+
 // True when p lies inside the polygon (even-odd rule; boundary counts as
 // inside up to rounding).
 bool PointInPolygon(const Polygon2& polygon, const Eigen::Vector2d& p);

@@ -377,6 +377,14 @@ Pose2 InterpolatePose(const std::vector<TimedPose2>& poses, double t) {
   return Interpolate(before->pose, after->pose, (t - before->timestamp_s) / span);
 }
 
+std::vector<Pose2> PosesAtFrames(const Dataset& dataset, const std::vector<TimedPose2>& poses) {
+  std::vector<Pose2> at_frames;
+  if (poses.empty()) return at_frames;
+  at_frames.reserve(dataset.frames.size());
+  for (const DatasetFrame& f : dataset.frames) at_frames.push_back(InterpolatePose(poses, f.timestamp_s));
+  return at_frames;
+}
+
 bool PointInPolygon(const Polygon2& polygon, const Eigen::Vector2d& p) {
   bool inside = false;
   for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
