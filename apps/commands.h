@@ -28,6 +28,7 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out);
 void AddSadMatchCommand(CLI::App& app, std::ostream& out);
 void AddMapCommand(CLI::App& app, std::ostream& out);
 void AddDemoCommand(CLI::App& app, std::ostream& out);
+void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);

@@ -127,6 +127,7 @@ nlohmann::ordered_json ClosureJson(const LoopClosure& c) {
                            {"relative_pose", {c.T_frame_matched.x(), c.T_frame_matched.y(), c.T_frame_matched.theta()}}};
   j["error_m"] = std::isnan(c.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(c.error_m);
   if (c.kind == ClosureKind::kOdometryInferred) j["parents"] = c.parents;
+  if (c.injected) j["injected"] = true;
   return j;
 }
 
@@ -218,6 +219,18 @@ void PrintLocalizationSummary(const Dataset& d, const LocalizationResult& r, boo
       out << "outside changed regions " << describe(c[0]) << "; inside " << describe(c[1]) << '\n';
     }
   }
+}
+
+void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o) {
+  cmd.add_option("--false-stretch", o.stretch_m, "Path length of each false match's stretch (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd.add_option("--false-min-error", o.min_error_m, "A false match is at least this far from the truth (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd.add_option("--false-max-error", o.max_error_m, "... and at most this far (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {

@@ -29,6 +29,10 @@ struct LocalizeCommandOptions {
 // The vocabulary and filter options of `localize` (and `map`) on `cmd`.
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o);
 
+// The shape of injected false visual matches (--false-stretch,
+// --false-min-error, --false-max-error) on `cmd`; the count is the caller's.
+void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o);
+
 // `o.vocabulary` if given; otherwise one trained on about 200 frames (or
 // every `o.train_every`-th) of the dataset's first traversal, the map, never
 // on the traversals localised against it.

@@ -4,12 +4,14 @@
 // (odometry, visual and inferred closures), the robust solve under the
 // closure hierarchy, then the corrected graph, the trajectory, report.json,
 // the CAT-Graph+ paper's figures and an index.html. docs/mapping.md.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -17,6 +19,7 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
+#include "apps/map_outcome.h"
 #include "apps/plot/figure.h"
 #include "backend/evaluation.h"
 #include "backend/graph/trajectory.h"
@@ -35,15 +38,8 @@ struct MapCommandOptions {
   std::string method = "switchable";
   std::string hierarchy = "cascade";
   PoseGraphOptimizerOptions optimizer;
+  FalseMatchOptions injection;  // its seed is the filter's
 };
-
-// Ground truth at every frame (vertex id = frame index); empty without truth.
-Trajectory2 TruthAtFrames(const Dataset& d) {
-  Trajectory2 truth;
-  PoseId::ValueType frame = 0;
-  for (const Pose2& pose : PosesAtFrames(d, d.ground_truth)) truth.emplace_hint(truth.end(), PoseId(frame++), pose);
-  return truth;
-}
 
 // `estimate` moved so that its first pose is the truth's first pose, for
 // drawing both in one frame; unchanged without truth.
@@ -134,29 +130,28 @@ std::string HtmlEscape(const std::string& text) {
 void RunMap(MapCommandOptions& o, std::ostream& out) {
   PoseGraphOptimizerOptions optimizer = o.optimizer;
   optimizer.method = *RobustMethodFromString(o.method);
-  HierarchyOptions hierarchy_options;
-  hierarchy_options.policy = *HierarchyPolicyFromString(o.hierarchy);
-  if (hierarchy_options.policy == HierarchyPolicy::kCoupled && optimizer.method != RobustMethod::kSwitchable) {
-    throw std::invalid_argument("--hierarchy coupled needs --method switchable (it couples switches)");
-  }
+  const HierarchyOptions hierarchy_options = HierarchyOptionsFor(o.hierarchy, optimizer);
   Validate(optimizer);
   const Dataset d = ReadDataset(o.front.dataset);
   const std::filesystem::path dir(o.front.output);
   CreateDirectories(dir, "output directory");
+  o.injection.seed = o.front.localization.filter.seed;
+  o.front.localization.false_matches = PlanFalseVisualMatches(d, o.front.localization.filter, o.injection);
 
   out << "[1/3] front end: CAT-Graph" << (o.front.localization.filter.odometric_inference ? "+" : "") << " on "
-      << d.frames.size() << " frames\n";
+      << d.frames.size() << " frames";
+  if (o.injection.count > 0) out << ", " << o.injection.count << " false visual matches injected";
+  out << "\n";
   const LocalizationResult r = RunLocalization(d, o.front, out);
   WriteLocalization(dir, d, r, o.front.localization.filter.closure_threshold);
   PrintLocalizationSummary(d, r, o.front.localization.filter.odometric_inference, out);
 
   out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on " << r.graph.vertices.size()
       << " poses and " << r.closures.size() << " closures\n";
-  const AnyPoseGraph front_graph(r.graph);
-  const ClosureHierarchy hierarchy = ClosureHierarchy::FromGraph(front_graph);
-  const HierarchicalOptimization solved = OptimizeWithHierarchy(front_graph, hierarchy, optimizer, hierarchy_options);
+  const Trajectory2 truth = TruthAtFrames(d);
+  const MapOutcome m = SolveMap(r, optimizer, hierarchy_options, truth);
+  const HierarchicalOptimization& solved = m.solved;
   const PoseGraphOptimization& result = solved.optimization;
-  if (!result.summary.IsUsable()) throw std::runtime_error("the solver failed: " + result.summary.message);
   const PoseGraph2& corrected = std::get<PoseGraph2>(result.graph);
   out << solved.solves << (solved.solves == 1 ? " solve" : " solves") << " in " << Number(solved.time_s, "%.2f")
       << " s; " << result.accepted << " closures accepted, " << result.rejected << " rejected";
@@ -165,62 +160,44 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   } else {
     out << " (" << solved.turned_off.size() << " turned off by the hierarchy)\n";
   }
+  const InjectionOutcome& injection = m.injection;
+  if (o.injection.count > 0) {
+    out << "injected: " << injection.parents_rejected << " of " << injection.parents
+        << " false visual closures rejected; " << injection.children_accepted << " of their " << injection.children
+        << " inferred children accepted, " << injection.children_of_rejected_accepted << " of them children of a "
+        << "rejected one\n";
+  }
 
   out << "[3/3] outputs\n";
-  const Trajectory2 truth = TruthAtFrames(d);
-  std::optional<TrajectoryEvaluation> ate_odometry, ate_corrected;
-  if (!truth.empty()) {
-    ate_odometry = EvaluateTrajectory(TrajectoryOf(r.graph), truth);
-    ate_corrected = EvaluateTrajectory(TrajectoryOf(corrected), truth);
-  }
   WriteG2oFile(result.graph, dir / "corrected.g2o");
   WriteG2oFile(DropRejected(result.graph, result.closures), dir / "corrected_accepted.g2o");
   WriteTumFile(AnyTrajectory(TrajectoryOf(corrected)), dir / "trajectory.tum");
 
   // report.json: the headline numbers, then every closure.
-  std::map<ClosureId, const ClosureDecision*> decision_of;
-  for (const ClosureDecision& c : result.closures) decision_of[c.id] = &c;
   std::map<ClosureId, SwitchId> switch_of;
   for (const auto& c : corrected.constraints) {
     if (c.switch_id) switch_of.emplace(c.id, *c.switch_id);
   }
-  std::map<ClosureId, ClosureId> turned_off_by;
-  for (const HierarchyDecision& h : solved.turned_off) turned_off_by[h.child] = h.parent;
-  struct KindCounts {
-    int count = 0, accepted = 0;
-    std::vector<double> errors, accepted_errors;
-    ErrorStatistics all, kept;  // of errors and accepted_errors
-  };
   // null when there is nothing to give (no switch, no ground truth, ...).
   auto optional_number = [](bool present, double value) {
     return present ? nlohmann::ordered_json(value) : nlohmann::ordered_json();
   };
-  std::map<ClosureKind, KindCounts> by_kind;
   nlohmann::ordered_json closures = nlohmann::ordered_json::array();
   for (const LoopClosure& c : r.closures) {
-    const ClosureDecision& decision = *decision_of.at(ClosureId(c.id));
+    const ClosureDecision& decision = m.decision_of.at(ClosureId(c.id));
     nlohmann::ordered_json j = ClosureJson(c);
     const auto switch_id = switch_of.find(decision.id);
     j["switch"] = switch_id == switch_of.end() ? nlohmann::ordered_json()
                                                : nlohmann::ordered_json(corrected.switches.at(switch_id->second).value);
     j["weight"] = decision.weight;
     j["accepted"] = decision.accepted;
-    const auto off = turned_off_by.find(decision.id);
-    j["turned_off_by"] = off == turned_off_by.end() ? nlohmann::ordered_json() : nlohmann::ordered_json(off->second.value());
+    const auto off = m.turned_off_by.find(decision.id);
+    j["turned_off_by"] = off == m.turned_off_by.end() ? nlohmann::ordered_json() : nlohmann::ordered_json(off->second.value());
     closures.push_back(j);
-    KindCounts& k = by_kind[c.kind];
-    ++k.count;
-    k.accepted += decision.accepted ? 1 : 0;
-    if (!std::isnan(c.error_m)) {
-      k.errors.push_back(c.error_m);
-      if (decision.accepted) k.accepted_errors.push_back(c.error_m);
-    }
   }
   nlohmann::ordered_json kinds = nlohmann::ordered_json::object();
   for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
-    KindCounts& k = by_kind[kind];
-    k.all = StatisticsOf(k.errors);
-    k.kept = StatisticsOf(k.accepted_errors);
+    const KindCounts& k = m.by_kind.at(kind);
     kinds[std::string(ToString(kind))] = {
         {"count", k.count},
         {"accepted", k.accepted},
@@ -248,11 +225,34 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
                                 {"accepted", result.accepted},
                                 {"rejected", result.rejected},
                                 {"closures_by_kind", kinds},
-                                {"ate_odometry", AteJson(ate_odometry)},
-                                {"ate_corrected", AteJson(ate_corrected)},
+                                {"ate_odometry", AteJson(m.ate_odometry)},
+                                {"ate_corrected", AteJson(m.ate_corrected)},
                                 {"turned_off", decisions_json(solved.turned_off)},
-                                {"surviving_children", decisions_json(solved.surviving_children)},
-                                {"closures", closures}};
+                                {"surviving_children", decisions_json(solved.surviving_children)}};
+  if (o.injection.count > 0) {
+    nlohmann::ordered_json matches = nlohmann::ordered_json::array();
+    for (const FalseVisualMatch& f : o.front.localization.false_matches) {
+      matches.push_back({{"first_frame", f.first_frame},
+                         {"last_frame", f.last_frame},
+                         {"matched_first_frame", f.matched_first_frame},
+                         {"matched_last_frame", f.matched_last_frame}});
+    }
+    const ErrorStatistics child_errors = StatisticsOf(injection.accepted_child_errors);
+    report["injected_false_visual"] = {
+        {"count", o.injection.count},
+        {"seed", o.injection.seed},
+        {"matches", matches},
+        {"false_closures", injection.parents},
+        {"false_closures_rejected", injection.parents_rejected},
+        {"children", injection.children},
+        {"children_accepted", injection.children_accepted},
+        {"children_of_rejected", injection.children_of_rejected},
+        {"children_of_rejected_accepted", injection.children_of_rejected_accepted},
+        {"children_turned_off", injection.children_turned_off},
+        {"accepted_children_error_max_m",
+         optional_number(!injection.accepted_child_errors.empty(), child_errors.max)}};
+  }
+  report["closures"] = closures;
   WriteFileAtomically(dir / "report.json", [&](std::ostream& f) { f << report.dump(1) << '\n'; });
 
   const plot::Figure map = MapFigure(d, r.graph, corrected, result.closures, truth);
@@ -262,7 +262,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   // index.html: the pictures and the headline numbers.
   std::ostringstream headline;
   for (const ClosureKind kind : {ClosureKind::kVisual, ClosureKind::kOdometryInferred}) {
-    const KindCounts& k = by_kind[kind];
+    const KindCounts& k = m.by_kind.at(kind);
     headline << "<tr><td>" << ToString(kind) << " closures</td><td>" << k.count << " (" << k.accepted
              << " accepted)";
     if (!k.errors.empty()) {
@@ -271,9 +271,14 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     headline << "</td></tr>\n";
   }
   headline << "<tr><td>turned off by the hierarchy</td><td>" << solved.turned_off.size() << "</td></tr>\n";
-  if (ate_odometry) {
-    headline << "<tr><td>ATE (RMSE, aligned)</td><td>odometry " << Number(ate_odometry->ate_m.rmse, "%.3f")
-             << " m &rarr; corrected " << Number(ate_corrected->ate_m.rmse, "%.3f") << " m</td></tr>\n";
+  if (o.injection.count > 0) {
+    headline << "<tr><td>injected false visual closures</td><td>" << injection.parents << " ("
+             << injection.parents_rejected << " rejected); their inferred children " << injection.children << " ("
+             << injection.children_accepted << " accepted)</td></tr>\n";
+  }
+  if (m.ate_odometry) {
+    headline << "<tr><td>ATE (RMSE, aligned)</td><td>odometry " << Number(m.ate_odometry->ate_m.rmse, "%.3f")
+             << " m &rarr; corrected " << Number(m.ate_corrected->ate_m.rmse, "%.3f") << " m</td></tr>\n";
   }
   WriteFileAtomically(dir / "index.html", [&](std::ostream& f) {
     f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>catgraph map: "
@@ -289,9 +294,9 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
       << "</body></html>\n";
   });
 
-  if (ate_odometry) {
-    out << "ATE (RMSE after alignment): odometry " << Number(ate_odometry->ate_m.rmse, "%.3f") << " m, corrected map "
-        << Number(ate_corrected->ate_m.rmse, "%.3f") << " m\n";
+  if (m.ate_odometry) {
+    out << "ATE (RMSE after alignment): odometry " << Number(m.ate_odometry->ate_m.rmse, "%.3f") << " m, corrected map "
+        << Number(m.ate_corrected->ate_m.rmse, "%.3f") << " m\n";
   }
   out << "wrote " << o.front.output
       << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum, report.json, map.png/svg, "
@@ -317,6 +322,12 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
       ->capture_default_str();
   AddLocalizationOptions(*cmd, o->front);
+  cmd->add_option("--inject-false-visual", o->injection.count,
+                  "Make the visual filter report N false matches (pairs of consistent false visual closures "
+                  "around a stretch of path; drawn by --seed; needs ground truth). docs/mapping.md")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  AddFalseMatchOptions(*cmd, o->injection);
   cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->front.quiet, "No progress bars");
   cmd->callback([o, &out] { RunMap(*o, out); });

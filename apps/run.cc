@@ -31,6 +31,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddSadMatchCommand(app, out);
   AddMapCommand(app, out);
   AddDemoCommand(app, out);
+  AddHierarchyExperimentCommand(app, out);
 }
 
 int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {

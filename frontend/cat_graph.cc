@@ -91,12 +91,16 @@ int CatGraphFilter::EligibleBelow() const {
   return static_cast<int>(first_ineligible - nodes.begin());
 }
 
+double OdometricGateRadius(const CatGraphOptions& options, double path_since_m) {
+  if (!options.odometric_gate) return std::numeric_limits<double>::infinity();
+  return options.odometric_gate_base_m + options.odometric_gate_fraction * path_since_m;
+}
+
 bool CatGraphFilter::Eligible(int node) const {
   if (node >= eligible_below_) return false;
   if (!options_.odometric_gate) return true;
   const GraphNode& n = graph_.node(node);
-  const double gate = options_.odometric_gate_base_m +
-                      options_.odometric_gate_fraction * (path_length_m_ - n.path_length_m);
+  const double gate = OdometricGateRadius(options_, path_length_m_ - n.path_length_m);
   return (odometry_pose_.translation() - n.odometry_pose.translation()).squaredNorm() <= gate * gate;
 }
 
@@ -263,7 +267,8 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
   return best;
 }
 
-CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, const WordSet& words) {
+CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, const WordSet& words,
+                                  const Aliasing& aliasing) {
   const bool first = graph_.nodes().empty();
   // After a gap in the frames (traversals recorded apart) the motion since
   // the previous frame says nothing about where the particles went: they are
@@ -279,6 +284,10 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   if (!first) path_length_m_ += u.translation().norm();
   if (!first) odometry_pose_ = odometry_pose_ * u;
   eligible_below_ = EligibleBelow();
+  if (aliasing.false_match >= eligible_below_) {
+    throw std::invalid_argument("CatGraphFilter: aliasing onto node " + std::to_string(aliasing.false_match) +
+                                ", which is not older than the exclusion windows");
+  }
   CatGraphStep step;
   const FrameLikelihood likelihood = model_.ForFrame(words);
 
@@ -337,10 +346,29 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
 
   // Location hypothesis and loop closure (Eq 4).
   step.best = BestHypothesis(particles_);
+  if (aliasing.false_match >= 0) {
+    // The start of the node's edge to its successor (the end of the edge
+    // from its predecessor for the newest node).
+    const int node = aliasing.false_match;
+    LocationHypothesis at{-1, 0.0, 1, 1.0};
+    for (const int e : graph_.node(node).edges) {
+      const GraphEdge& edge = graph_.edge(e);
+      if (edge.type != EdgeType::kOdometry) continue;
+      if (edge.from == node) at.edge = e, at.alpha = 0.0;
+      if (edge.to == node && at.edge < 0) at.edge = e, at.alpha = 1.0;
+    }
+    if (at.edge < 0) throw std::invalid_argument("CatGraphFilter: aliasing onto a node without odometry edges");
+    const double log_weight = -std::log(static_cast<double>(options_.num_particles));
+    particles_.assign(static_cast<std::size_t>(options_.num_particles), {at.edge, at.alpha, 1, log_weight});
+    step.best = at;
+    step.new_place_probability = 0.0;
+    mapped_mass_ = 1.0;
+  }
   const int previous = first ? -1 : static_cast<int>(graph_.nodes().size()) - 1;
   step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, words);
   if (previous >= 0) graph_.AddEdge(previous, step.node, u, EdgeType::kOdometry);
-  if (step.best.edge >= 0 && step.best.value > options_.closure_threshold) {
+  const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold;
+  if (aliasing.false_match >= 0 || (confident && !aliasing.withhold_closure)) {
     step.closure = true;
     std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);
     step.loop_edge = graph_.AddEdge(step.node, step.matched_node, step.T_node_matched, EdgeType::kVisualLoop);

@@ -90,6 +90,11 @@ struct CatGraphOptions {
 // Throws std::invalid_argument naming the first field out of range.
 void Validate(const CatGraphOptions& options);
 
+// The odometric gate's radius for a node `path_since_m` of path behind the
+// robot: a node farther than this from the robot by dead reckoning is not
+// eligible (infinite when the gate is off).
+double OdometricGateRadius(const CatGraphOptions& options, double path_since_m);
+
 struct Particle {
   int edge = -1;
   double alpha = 0.0;   // fraction along the edge from its start
@@ -111,6 +116,20 @@ struct InferredClosure {
   LocationHypothesis location;     // the odometric filter's best hypothesis then
   int matched_node = -1;           // the nearer end of the matched edge
   Pose2 T_node_matched;
+};
+
+// Perceptual aliasing imposed on one step, for false-positive experiments
+// (`catgraph map --inject-false-visual`, docs/mapping.md). The default is
+// none: the filter as the spec has it.
+struct Aliasing {
+  // >= 0: the frame is taken for this old node, as when two places look
+  // alike: every visual particle is put at the node, facing the way the
+  // node faced, and a visual closure to it is reported whatever the
+  // filter believed. The node must be older than the exclusion windows.
+  int false_match = -1;
+  // The filter's own closure, if it makes one, is withheld (the frames
+  // between a pair of false matches, while the aliasing lasts).
+  bool withhold_closure = false;
 };
 
 struct CatGraphStep {
@@ -144,8 +163,9 @@ class CatGraphFilter {
   CatGraphFilter& operator=(const CatGraphFilter&) = delete;
 
   // One frame: `u` is the odometry since the previous frame (ignored for the
-  // first), `words` the frame's observation.
-  CatGraphStep Step(int frame, double time_s, const Pose2& u, const WordSet& words);
+  // first), `words` the frame's observation. Throws std::invalid_argument
+  // for an aliasing onto a node that is not eligible by age.
+  CatGraphStep Step(int frame, double time_s, const Pose2& u, const WordSet& words, const Aliasing& aliasing = {});
 
   const TrajectoryGraph& graph() const { return graph_; }
   const std::vector<Particle>& particles() const { return particles_; }

@@ -58,6 +58,29 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     throw std::invalid_argument("Localize: " + std::to_string(words.size()) + " word sets for " +
                                 std::to_string(d.frames.size()) + " frames");
   }
+  // The aliasing of every frame; the filter's node of frame k is k.
+  std::vector<Aliasing> aliasing(d.frames.size());
+  std::vector<bool> injected(d.frames.size(), false);
+  for (const FalseVisualMatch& m : options.false_matches) {
+    auto frame_ok = [&](int f) { return f >= 0 && static_cast<std::size_t>(f) < d.frames.size(); };
+    if (!(frame_ok(m.first_frame) && frame_ok(m.last_frame) && frame_ok(m.matched_first_frame) &&
+          frame_ok(m.matched_last_frame) && m.first_frame < m.last_frame &&
+          m.matched_first_frame < m.first_frame && m.matched_last_frame < m.first_frame)) {
+      throw std::invalid_argument("Localize: a false visual match must map frames first < last onto older frames " +
+                                  std::string("of the dataset, not ") + std::to_string(m.first_frame) + "-" +
+                                  std::to_string(m.last_frame) + " onto " + std::to_string(m.matched_first_frame) +
+                                  "-" + std::to_string(m.matched_last_frame));
+    }
+    for (int f = m.first_frame; f <= m.last_frame; ++f) {
+      if (aliasing[static_cast<std::size_t>(f)].withhold_closure) {
+        throw std::invalid_argument("Localize: false visual matches overlap at frame " + std::to_string(f));
+      }
+      aliasing[static_cast<std::size_t>(f)].withhold_closure = true;
+    }
+    aliasing[static_cast<std::size_t>(m.first_frame)].false_match = m.matched_first_frame;
+    aliasing[static_cast<std::size_t>(m.last_frame)].false_match = m.matched_last_frame;
+    injected[static_cast<std::size_t>(m.first_frame)] = injected[static_cast<std::size_t>(m.last_frame)] = true;
+  }
   CatGraphFilter filter(model, options.filter);
   LocalizationResult result;
   std::vector<std::size_t> sizes;
@@ -87,16 +110,16 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   };
 
   std::map<int, int> visual_closure_of_frame;  // frame -> closure id
-  auto add_closure = [&](const LoopClosure& c) {
+  auto add_closure = [&](const LoopClosure& c, double information_scale = 1.0) {
     result.closures.push_back(c);
     Provenance provenance;
     for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
     result.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
-                                        {c.T_frame_matched, closure_information}, c.kind, provenance, {}, {}});
+                                        {c.T_frame_matched, information_scale * closure_information}, c.kind, provenance, {}, {}});
   };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
     const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
-    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, words[k]);
+    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, words[k], aliasing[k]);
     FrameLocalization f;
     f.frame = static_cast<int>(k);
     f.traversal = d.frames[k].traversal;
@@ -125,6 +148,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
       c.T_frame_matched = step.T_node_matched;
       c.hypothesis = step.best.value;
       c.error_m = f.error_m;
+      c.injected = injected[k];
       add_closure(c);
       // CAT-Graph+: what this visual closure validated or discarded.
       const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
@@ -139,7 +163,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
         i.hypothesis = inferred.location.value;
         i.error_m = location_error(static_cast<std::size_t>(i.frame), inferred.location);
         i.parents = {reference, c.id};
-        add_closure(i);
+        add_closure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inferred.size()) : 1.0);
       }
       for (const InferredClosure& inferred : step.discarded) {
         const int at = frame_of(inferred.node);

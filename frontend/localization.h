@@ -13,6 +13,7 @@
 #include "backend/graph/pose_graph.h"
 #include "backend/io/dataset.h"
 #include "frontend/cat_graph.h"
+#include "frontend/false_matches.h"
 #include "frontend/vocabulary.h"
 
 namespace catgraph {
@@ -43,6 +44,7 @@ struct LoopClosure {
   double error_m = kNoError;      // position error of the matched location
   // Inferred: the visual closure it hangs from and the one that validated it.
   std::vector<int> parents;
+  bool injected = false;          // a false visual match of LocalizationOptions::false_matches
 };
 
 // Inferences that passed local validation but failed total-path validation.
@@ -78,11 +80,21 @@ struct PoseGraphUncertainty {
   // position error (mean 0.18 m, lateral offsets between traversals 0.15 m)
   // and the heading difference between traversals at one place.
   Eigen::Vector3d closure_sigma{0.25, 0.25, 0.05};
+  // The n inferred closures one visual closure validates share one
+  // closure's information (each gets 1/n of it): every one of them is its
+  // parents' match carried along by odometry, so they share its error and
+  // are not n independent measurements. Counted as independent, a false
+  // pair of visual matches arrives with dozens of consistent children and
+  // outweighs the odometry that contradicts it (docs/mapping.md).
+  bool share_inferred_information = true;
 };
 
 struct LocalizationOptions {
   CatGraphOptions filter;
   PoseGraphUncertainty graph_uncertainty;
+  // Perceptual aliasing imposed on the filter (false_matches.h); empty:
+  // none. Checked against the dataset's frames.
+  std::vector<FalseVisualMatch> false_matches;
   int threads = 0;                // feature extraction; 0: every core
   // Called from the calling thread: stage is "features" or "filter".
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;

@@ -422,6 +422,76 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   CHECK(accepted > 0);
   CHECK(accepted_changed <= 0.1 * changed_queries);
   CHECK(std::filesystem::exists(root / "sad" / "sad.png"));
+
+  // Issue #8: false visual matches at the source. The flagged closures and
+  // their children in report.json ...
+  const auto injected_dir = root / "injected";
+  const Result map = Run({"map", data.string(), "-o", injected_dir.string(), "--inject-false-visual", "3", "--seed",
+                          "2", "--quiet"});
+  INFO(map.out << map.err);
+  REQUIRE(map.status == 0);
+  std::ifstream injected_in(injected_dir / "report.json");
+  const auto injected_report = nlohmann::json::parse(injected_in);
+  REQUIRE(injected_report.contains("injected_false_visual"));
+  const auto& injection = injected_report.at("injected_false_visual");
+  CHECK(injection.at("count") == 3);
+  CHECK(injection.at("matches").size() == 3);
+  std::set<int> false_ids;
+  int children = 0;
+  for (const auto& c : injected_report.at("closures")) {
+    if (c.value("injected", false)) {
+      false_ids.insert(c.at("id").get<int>());
+      CHECK(c.at("error_m").get<double>() >= 2.0);
+    } else if (c.at("kind") == "inferred" && false_ids.count(c.at("parents")[0].get<int>()) &&
+               false_ids.count(c.at("parents")[1].get<int>())) {
+      ++children;  // between a pair
+      if (c.at("turned_off_by").is_null()) CHECK_FALSE(c.at("accepted").get<bool>());
+    }
+  }
+  CHECK(false_ids.size() == 6);
+  CHECK(injection.at("false_closures") == 6);
+  CHECK(children >= 3 * 20);
+  CHECK(injection.at("children").get<int>() >= children);
+
+  // ... and what the hierarchy buys (docs/mapping.md): cascade and coupled
+  // turn off every child of a rejected false parent and the map is as good
+  // as without the injection; under flat, children survive and cost.
+  const auto experiment = root / "experiment";
+  const Result run = Run({"hierarchy-experiment", data.string(), "-o", experiment.string(), "--seeds", "1"});
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  std::ifstream table(experiment / "hierarchy-experiment.csv");
+  std::getline(table, line);
+  CHECK(line ==
+        "seed,hierarchy,false_closures,false_closures_rejected,children,children_accepted,children_of_rejected,"
+        "children_of_rejected_accepted,children_turned_off,accepted_children_error_max_m,ate_without_m,ate_with_m,"
+        "ate_oracle_m,ate_ratio,solves");
+  std::map<std::string, std::vector<std::string>> row_of;
+  while (std::getline(table, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (line.back() == ',') f.push_back("");
+    REQUIRE(f.size() == 15);
+    row_of[f[1]] = f;
+  }
+  REQUIRE(row_of.size() == 3);
+  for (const auto& [policy, f] : row_of) {
+    CAPTURE(policy);
+    CHECK(f[2] == "20");
+    CHECK(f[3] == "20");  // every false visual closure rejected
+    const double without = std::stod(f[10]), with = std::stod(f[11]), oracle = std::stod(f[12]);
+    if (policy == "flat") {
+      CHECK(std::stoi(f[7]) > 0);   // children of rejected parents survive ...
+      CHECK(with > 1.5 * oracle);   // ... and cost
+    } else {
+      CHECK(std::stoi(f[7]) == 0);
+      CHECK(std::stoi(f[8]) > 0);   // the hierarchy, not the back end alone, turned them off
+      CHECK(with <= 1.1 * without);
+      CHECK(with == Approx(oracle).epsilon(0.02));
+    }
+  }
+  CHECK(std::filesystem::exists(experiment / "hierarchy-experiment.md"));
   std::filesystem::remove_all(root);
 }
 

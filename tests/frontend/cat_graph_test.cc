@@ -4,6 +4,7 @@
 #include <numbers>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -206,6 +207,53 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
     visual += with.steps[k].closure;
   }
   CHECK(visual > 0);
+}
+
+TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Graph+ carries it between the pair",
+          "[frontend][catgraph][catgraph-plus][false-matches]") {
+  RingWorld world;
+  const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
+  CatGraphOptions options;
+  options.num_particles = 500;
+  options.new_place_log_offset = 0.0;
+  CatGraphFilter filter(model, options);
+  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  // Second lap, 20 m to 22 m along the ring, taken for 17 m to 19 m of the
+  // first (node ids are frame indices here).
+  const int first = per_lap + 200, last = per_lap + 220, back = per_lap + 30;
+  std::vector<CatGraphStep> steps;
+  for (int k = 0; k <= last + 20; ++k) {
+    Aliasing aliasing;
+    if (k >= first && k <= last) aliasing.withhold_closure = true;
+    if (k == first || k == last) aliasing.false_match = k - back;
+    steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep),
+                                aliasing));
+  }
+  for (const int k : {first, last}) {
+    const CatGraphStep& s = steps[static_cast<std::size_t>(k)];
+    CAPTURE(k);
+    REQUIRE(s.closure);
+    CHECK(s.matched_node == k - back);
+    CHECK(s.T_node_matched.translation().norm() == Approx(0.0).margin(1e-9));
+    CHECK(s.T_node_matched.theta() == Approx(0.0).margin(1e-9));
+  }
+  for (int k = first + 1; k < last; ++k) CHECK_FALSE(steps[static_cast<std::size_t>(k)].closure);
+  // The second false match validates what the odometric filter inferred
+  // from the first: the frames between, each 3 m off.
+  const CatGraphStep& end = steps[static_cast<std::size_t>(last)];
+  CHECK(end.reference_node == first);
+  CHECK(end.inferred.size() >= 15);
+  for (const InferredClosure& c : end.inferred) {
+    CAPTURE(c.node, c.matched_node);
+    CHECK(c.node > first);
+    CHECK(c.node < last);
+    CHECK(RingDistance(c.node, c.matched_node) == Approx(3.0).margin(0.3));
+  }
+  // Aliasing onto the robot's own recent frames is refused.
+  Aliasing recent;
+  recent.false_match = last + 15;
+  CHECK_THROWS_AS(filter.Step(last + 21, 0.25 * (last + 21), RingWorld::Step(), world.Observe(0.0), recent),
+                  std::invalid_argument);
 }
 
 TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",

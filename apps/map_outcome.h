@@ -1,0 +1,70 @@
+// The back-end stage of `catgraph map`, shared with `hierarchy-experiment`:
+// the front end's graph solved under the closure hierarchy, and how the
+// result scores — closures by kind, the injected false visual closures and
+// their children, the ATE of odometry alone and of the corrected map.
+#ifndef CATGRAPH_APPS_MAP_OUTCOME_H_
+#define CATGRAPH_APPS_MAP_OUTCOME_H_
+
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "backend/evaluation.h"
+#include "backend/graph/trajectory.h"
+#include "backend/io/dataset.h"
+#include "backend/pose_graph_optimizer.h"
+#include "frontend/localization.h"
+#include "hierarchy/closure_hierarchy.h"
+
+namespace catgraph {
+
+// Ground truth at every frame (vertex id = frame index); empty without truth.
+Trajectory2 TruthAtFrames(const Dataset& d);
+
+// The hierarchy options of a policy name; coupled needs the switchable
+// method. Throws std::invalid_argument.
+HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer);
+
+// Closures of one kind and how the back end decided them.
+struct KindCounts {
+  int count = 0, accepted = 0;
+  std::vector<double> errors, accepted_errors;  // against ground truth
+  ErrorStatistics all, kept;                    // of errors and accepted_errors
+};
+
+// The injected false visual closures (LoopClosure::injected) and their
+// children (inferred closures with a false parent), and what became of them.
+struct InjectionOutcome {
+  int parents = 0, parents_rejected = 0;
+  int children = 0, children_accepted = 0;
+  std::vector<double> accepted_child_errors;  // against ground truth
+  // Children with a rejected false parent: how many, how many the back end
+  // still accepted (none under cascade and coupled), and how many the
+  // hierarchy turned off (the rest were rejected on their own).
+  int children_of_rejected = 0, children_of_rejected_accepted = 0, children_turned_off = 0;
+};
+
+struct MapOutcome {
+  HierarchicalOptimization solved;
+  std::map<ClosureId, ClosureDecision> decision_of;
+  std::map<ClosureId, ClosureId> turned_off_by;  // child -> parent
+  std::map<ClosureKind, KindCounts> by_kind;     // visual and inferred, present even when empty
+  InjectionOutcome injection;
+  std::optional<TrajectoryEvaluation> ate_odometry, ate_corrected;  // with ground truth
+};
+
+// The injected false visual closures and every inferred closure with one of
+// them as a parent: what an oracle would leave out.
+std::set<ClosureId> InjectedAndChildren(const LocalizationResult& r);
+
+// Solves the front end's graph under the hierarchy and scores it against
+// `truth` (TruthAtFrames; may be empty). Throws std::runtime_error when the
+// solver fails.
+MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions& optimizer,
+                    const HierarchyOptions& hierarchy, const Trajectory2& truth);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_APPS_MAP_OUTCOME_H_
