@@ -221,7 +221,12 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
   candidates.resize(k);
 
   const double r = options_.hypothesis_radius_m;
-  std::vector<std::pair<Eigen::Vector2d, double>> nearby;
+  struct Nearby {
+    Eigen::Vector2d position;
+    double weight;
+    int direction;
+  };
+  std::vector<Nearby> nearby;
   std::map<int, std::size_t> bins;  // 0.1 m bin -> heaviest particle
   for (const EdgeGroup* g : candidates) {
     const GraphEdge& e = graph_.edge(g->edge);
@@ -242,22 +247,27 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
       if (other == nullptr) continue;
       for (std::size_t q = other->begin; q < other->end; ++q) {
         const Particle& p = particles[order_[q]];
-        nearby.emplace_back(Interpolate(s.from, s.to, p.alpha).translation(), std::exp(p.log_weight));
+        nearby.push_back({Interpolate(s.from, s.to, p.alpha).translation(), std::exp(p.log_weight), p.direction});
       }
     }
     for (const auto& [bin, i] : bins) {
       const Eigen::Vector2d c = local_.PointPose(g->edge, particles[i].alpha)->translation();
-      double sum = 0.0;
+      double sum = 0.0, forward = 0.0;
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-      for (const auto& [q, w] : nearby) {
-        if ((q - c).squaredNorm() <= r * r) sum += w, mean += w * q;
+      for (const Nearby& q : nearby) {
+        if ((q.position - c).squaredNorm() > r * r) continue;
+        sum += q.weight;
+        mean += q.weight * q.position;
+        forward += q.direction > 0 ? q.weight : 0.0;
       }
       if (sum <= best.value) continue;
       // Eq 4 is flat over every candidate whose d_h-disc holds the cloud, so
       // the argmax alone can sit up to d_h off; the location reported is the
       // weighted mean of the particles in the winning disc, projected back
-      // onto the graph [D, docs/frontend.md].
-      best = {g->edge, particles[i].alpha, particles[i].direction, sum};
+      // onto the graph, facing the way most of their weight faces (after
+      // resampling every weight is equal, and the candidate particle's own
+      // direction would be anyone's) [D, docs/frontend.md].
+      best = {g->edge, particles[i].alpha, forward >= 0.5 * sum ? 1 : -1, sum};
       if (const auto p = ProjectOntoLocalGraph(local_, Pose2(mean.x() / sum, mean.y() / sum, 0.0))) {
         best.edge = p->edge;
         best.alpha = p->alpha;

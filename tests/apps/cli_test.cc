@@ -1,7 +1,9 @@
 // The `catgraph` command run in process, exactly as main() runs it.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
@@ -324,6 +326,8 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   for (const auto& c : closures) {
     for (const char* key : {"id", "frame", "matched_frame", "kind", "hypothesis", "error_m"}) CHECK(c.contains(key));
     const double e = c.at("error_m").get<double>();
+    // Both traversals run the same way round: no closure faces backwards.
+    CHECK(std::abs(c.at("relative_pose")[2].get<double>()) < std::numbers::pi / 2);
     if (c.at("kind") == "inferred") {
       // CAT-Graph+ (the default): hangs from one visual closure, validated
       // by a later one; never wrong by more than a metre.
