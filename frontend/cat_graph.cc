@@ -157,7 +157,11 @@ void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const
       continue;
     }
     const Pose2 x = p.direction < 0 ? *start * Pose2(0.0, 0.0, std::numbers::pi) : *start;
-    const Pose2 noisy(u.x() + s[0] * normal(rng), u.y() + s[1] * normal(rng), u.theta() + s[2] * normal(rng));
+    // One draw per statement: a call's arguments are evaluated in an
+    // unspecified order, and a seed must give the same particles with every
+    // compiler (heading first: the order GCC used, so results stay as measured).
+    const double w_theta = s[2] * normal(rng), w_y = s[1] * normal(rng), w_x = s[0] * normal(rng);
+    const Pose2 noisy(u.x() + w_x, u.y() + w_y, u.theta() + w_theta);
     const Pose2 y = x * noisy;
     const auto projection = ProjectOntoLocalGraph(local_, y);
     if (!projection) {

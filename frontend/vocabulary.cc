@@ -176,8 +176,21 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
     }
     std::string feature;
     fs["feature"] >> feature;
+    // The matrix's declared size against the values it holds, before OpenCV
+    // allocates it (a hostile file declares rows: 1e18; found by fuzzing).
+    const cv::FileNode centres_node = fs["centres"];
+    if (!centres_node.isMap() || !centres_node["rows"].isInt() || !centres_node["cols"].isInt() ||
+        !centres_node["data"].isSeq()) {
+      throw FileError(name, 0, "centres: expected an !!opencv-matrix with rows, cols and data");
+    }
+    const int rows = centres_node["rows"], cols = centres_node["cols"];
+    const std::size_t values = centres_node["data"].size();
+    if (rows < 0 || cols < 0 || static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) != values) {
+      throw FileError(name, 0, "centres: " + std::to_string(rows) + " rows x " + std::to_string(cols) +
+                                   " columns declared, " + std::to_string(values) + " values given");
+    }
     cv::Mat centres;
-    fs["centres"] >> centres;
+    centres_node >> centres;
     ChowLiuTree tree;
     tree.parent = ReadSequence<int>(fs["tree_parent"]);
     tree.p_z = ReadSequence<double>(fs["tree_p_z"]);
@@ -201,6 +214,9 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
     throw FileError(name, 0, "expected a catgraph vocabulary (OpenCV YAML): " + e.msg);
   } catch (const std::invalid_argument& e) {
     throw FileError(name, 0, e.what());
+  } catch (const std::length_error& e) {
+    // OpenCV's YAML parser on some malformed input (fuzzing, docs/fuzzing.md).
+    throw FileError(name, 0, std::string("expected a catgraph vocabulary (OpenCV YAML); OpenCV failed: ") + e.what());
   }
 }
 

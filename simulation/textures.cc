@@ -65,6 +65,12 @@ class Canvas {
   double height_m_;
 };
 
+// The world's random draws. C++ leaves the order in which a call's
+// arguments are evaluated unspecified, so no call takes two draws as
+// arguments: each is a statement of its own, and a seed gives the same world
+// with every compiler (GCC and clang once drew different textures from one
+// seed). Where draws were split out, they keep the order GCC gave them, last
+// argument first, so that the datasets stayed as they were.
 class Dice {
  public:
   explicit Dice(std::mt19937_64& rng) : rng_(rng) {}
@@ -137,13 +143,17 @@ void Poster(Canvas& c, Dice& d, double x0, double w) {
         c.Rect(std::max(x, sx - r), std::max(z, sz - r), std::min(x + pw, sx + r),
                std::min(z + ph, sz + r), d.Vivid());
         break;
-      default:
-        c.Segment(x + d.Uniform(0.0, pw), z + d.Uniform(0.0, ph), x + d.Uniform(0.0, pw),
-                  z + d.Uniform(0.0, ph), d.Vivid(), 0.02);
+      default: {
+        const cv::Scalar colour = d.Vivid();
+        const double end_z = z + d.Uniform(0.0, ph), end_x = x + d.Uniform(0.0, pw);
+        const double start_z = z + d.Uniform(0.0, ph), start_x = x + d.Uniform(0.0, pw);
+        c.Segment(start_x, start_z, end_x, end_z, colour, 0.02);
         break;
+      }
     }
   }
-  c.Text(d.Word(3, 6), x + 0.05, z + ph - 0.12, 0.07, d.Dark());
+  const cv::Scalar dark = d.Dark();
+  c.Text(d.Word(3, 6), x + 0.05, z + ph - 0.12, 0.07, dark);
 }
 
 void NoticeBoard(Canvas& c, Dice& d, double x0, double w) {
@@ -255,10 +265,12 @@ void FurnitureSide(Canvas& c, Dice& d, FurnitureStyle style, double w, double h)
       for (int i = d.Int(3, 7); i > 0; --i) {
         const cv::Scalar ink = d.Chance(0.5) ? cv::Scalar(160, 40, 20) : cv::Scalar(30, 30, 190);
         if (d.Chance(0.5)) {
-          c.Text(d.Word(2, 5), d.Uniform(0.1, std::max(0.11, w - 0.5)), d.Uniform(0.9, h - 0.15), 0.07, ink);
+          const double tz = d.Uniform(0.9, h - 0.15), tx = d.Uniform(0.1, std::max(0.11, w - 0.5));
+          c.Text(d.Word(2, 5), tx, tz, 0.07, ink);
         } else {
-          c.Segment(d.Uniform(0.1, w - 0.1), d.Uniform(0.9, h - 0.1), d.Uniform(0.1, w - 0.1),
-                    d.Uniform(0.9, h - 0.1), ink, 0.012);
+          const double end_z = d.Uniform(0.9, h - 0.1), end_x = d.Uniform(0.1, w - 0.1);
+          const double start_z = d.Uniform(0.9, h - 0.1), start_x = d.Uniform(0.1, w - 0.1);
+          c.Segment(start_x, start_z, end_x, end_z, ink, 0.012);
         }
       }
       break;
@@ -267,7 +279,8 @@ void FurnitureSide(Canvas& c, Dice& d, FurnitureStyle style, double w, double h)
       c.Rect(w / 2 - 0.18, 0, w / 2 + 0.18, 0.35, cv::Scalar(40, 60, 150));
       for (int i = 60; i > 0; --i) {
         const double x = w / 2 + d.Uniform(-0.45, 0.45) * w, z = d.Uniform(0.35, h);
-        c.Circle(x, z, d.Uniform(0.03, 0.08), cv::Scalar(d.Uniform(20, 60), d.Uniform(90, 170), d.Uniform(20, 70)));
+        const double red = d.Uniform(20, 70), green = d.Uniform(90, 170), blue = d.Uniform(20, 60);
+        c.Circle(x, z, d.Uniform(0.03, 0.08), cv::Scalar(blue, green, red));
       }
       break;
     }
@@ -276,7 +289,8 @@ void FurnitureSide(Canvas& c, Dice& d, FurnitureStyle style, double w, double h)
         double bh = std::min(h - z, d.Uniform(0.25, 0.45));
         for (double x = 0.0; x < w - 0.05;) {
           const double bw = std::min(w - x, d.Uniform(0.3, 0.6));
-          c.Rect(x, z, x + bw, z + bh, cv::Scalar(d.Uniform(70, 100), d.Uniform(130, 160), d.Uniform(180, 210)));
+          const double red = d.Uniform(180, 210), green = d.Uniform(130, 160), blue = d.Uniform(70, 100);
+          c.Rect(x, z, x + bw, z + bh, cv::Scalar(blue, green, red));
           c.Rect(x, z, x + bw, z + bh, cv::Scalar(50, 80, 110), 1);
           c.Rect(x + bw * 0.2, z + bh * 0.45, x + bw * 0.6, z + bh * 0.75, cv::Scalar(245, 245, 245));
           c.Text(d.Number(2), x + bw * 0.22, z + bh * 0.5, 0.05, cv::Scalar(10, 10, 10));

@@ -171,6 +171,8 @@ DatasetMeta ReadMeta(const std::filesystem::path& path) {
     // nlohmann reports the 1-based byte offset of the error.
     throw FileError(name, LineOfOffset(text, e.byte > 0 ? e.byte - 1 : 0),
                     std::string("expected valid JSON: ") + e.what());
+  } catch (const nlohmann::json::exception& e) {  // a number out of range (found by fuzzing)
+    throw FileError(name, 0, std::string("expected valid JSON: ") + e.what());
   }
   DatasetMeta meta;
   try {

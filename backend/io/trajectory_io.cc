@@ -60,6 +60,10 @@ TrajectoryFormat Detect(const std::vector<NumberedLine>& lines, const std::strin
 Trajectory2 ParsePoses(const std::vector<NumberedLine>& lines, const std::string& name) {
   Trajectory2 trajectory;
   const std::size_t columns = Tokenize(lines.front().text).size();
+  if (columns != 3 && columns != 4) {
+    throw FileError(name, lines.front().number,
+                    "found " + std::to_string(columns) + " values; expected 3 (x y theta) or 4 (id x y theta)");
+  }
   std::int64_t row = 0;
   for (const NumberedLine& l : lines) {
     const Line line(name, l.number, Tokenize(l.text), "pose");

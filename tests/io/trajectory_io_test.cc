@@ -20,9 +20,9 @@ AnyTrajectory Read(const std::string& text, TrajectoryFormat format = Trajectory
   return ReadTrajectory(in, "t.txt", format);
 }
 
-std::string ErrorOf(const std::string& text) {
+std::string ErrorOf(const std::string& text, TrajectoryFormat format = TrajectoryFormat::kAuto) {
   try {
-    Read(text);
+    Read(text, format);
   } catch (const FileError& e) {
     return e.what();
   }
@@ -72,6 +72,12 @@ TEST_CASE("bad trajectory files name the file, the line and what was expected",
         "t.txt:2: pose 0 is listed twice; expected one line per pose");
   CHECK(ErrorOf("1 0 0 0 0 0 0 2\n").starts_with("t.txt:1: the quaternion has norm 2"));
   CHECK(ErrorOf("# nothing\n") == "t.txt:1: no pose in the file");
+  // Asked for poses, a first line of 2 or 5 values (found by fuzzing: the
+  // column count was trusted and indexed past the line).
+  CHECK(ErrorOf("1 2\n3 4\n", TrajectoryFormat::kPoses) ==
+        "t.txt:1: found 2 values; expected 3 (x y theta) or 4 (id x y theta)");
+  CHECK(ErrorOf("1 2 3 4 5\n", TrajectoryFormat::kPoses) ==
+        "t.txt:1: found 5 values; expected 3 (x y theta) or 4 (id x y theta)");
   CHECK(ErrorOf("EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n").find("pose 0 has no value") !=
         std::string::npos);
   CHECK_THROWS_WITH(ReadTrajectoryFile("/nonexistent/truth.txt"),

@@ -1,0 +1,154 @@
+// What each libFuzzer target feeds a reader, as plain functions: the
+// fuzzers call them, and tests/io/fuzz_regressions_test.cc runs every input
+// a fuzzer ever crashed on (tests/fixtures/fuzz/TARGET/) through them. Each
+// returns normally or throws FileError, the readers' one error type;
+// anything else (another exception, a crash, a sanitizer report) is a bug.
+// The first byte of an input picks the reader or format where a target has
+// several; docs/fuzzing.md.
+#ifndef CATGRAPH_FUZZ_FUZZ_INPUTS_H_
+#define CATGRAPH_FUZZ_FUZZ_INPUTS_H_
+
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "apps/sweep.h"
+#include "backend/io/closure_labels.h"
+#include "backend/io/dataset.h"
+#include "backend/io/file_error.h"
+#include "backend/io/graph_io.h"
+#include "backend/io/trajectory_io.h"
+#include "frontend/vocabulary.h"
+#include "simulation/scenario.h"
+
+namespace catgraph::fuzz {
+
+// A folder of this process's own under the temporary directory, made once,
+// for the readers that take paths.
+inline const std::filesystem::path& ScratchDir() {
+  static const std::filesystem::path dir = [] {
+    auto d = std::filesystem::temp_directory_path() / ("catgraph_fuzz_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+inline void WriteFile(const std::filesystem::path& path, std::string_view bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// g2o, TORO and iSAM graphs. First byte: format (auto, g2o, TORO, iSAM) in
+// its low two bits, a ".graph" name with bit 2. What was read is written.
+inline void Graph(std::string_view input) {
+  if (input.empty()) return;
+  constexpr GraphFormat kFormats[] = {GraphFormat::kAuto, GraphFormat::kG2o, GraphFormat::kToro, GraphFormat::kIsam};
+  const auto first = static_cast<unsigned char>(input[0]);
+  ReadGraphOptions options;
+  options.format = kFormats[first % 4];
+  std::istringstream in{std::string(input.substr(1))};
+  try {
+    const GraphFile file = ReadGraph(in, (first & 4) ? "fuzz.graph" : "fuzz.g2o", options);
+    std::ostringstream out;
+    WriteG2o(file.graph, out);
+  } catch (const FileError&) {
+  }
+}
+
+// Trajectories (format auto, graph, poses, TUM in the low two bits) or, with
+// bit 2, closure labels: the line readers of catgraph evaluate.
+inline void Trajectory(std::string_view input) {
+  if (input.empty()) return;
+  constexpr TrajectoryFormat kFormats[] = {TrajectoryFormat::kAuto, TrajectoryFormat::kGraph,
+                                           TrajectoryFormat::kPoses, TrajectoryFormat::kTum};
+  const auto first = static_cast<unsigned char>(input[0]);
+  std::istringstream in{std::string(input.substr(1))};
+  try {
+    if (first & 4) {
+      ReadClosureLabels(in, "fuzz_labels.csv");
+    } else {
+      const AnyTrajectory t = ReadTrajectory(in, "fuzz.txt", kFormats[first % 4]);
+      std::ostringstream out;
+      WriteTum(t, out);
+    }
+  } catch (const FileError&) {
+  }
+}
+
+// A simulator scenario file (the whole input).
+inline void Scenario(std::string_view input) {
+  try {
+    ParseScenario(input, "fuzz.yaml", ScratchDir());
+  } catch (const FileError&) {
+  }
+}
+
+// A dataset folder: the first byte picks the file (frames.csv, odometry.csv,
+// groundtruth.csv, meta.json) the rest replaces in a valid three-frame
+// dataset.
+inline void DatasetFolder(std::string_view input) {
+  if (input.empty()) return;
+  constexpr std::string_view kFrames =
+      "timestamp,image,traversal,changed,changed_fraction\n"
+      "0.000000,images/000000.png,1,0,0.0000\n"
+      "0.100000,images/000001.png,1,0,0.0000\n"
+      "0.200000,images/000002.png,2,1,0.5000\n";
+  constexpr std::string_view kPoses =
+      "timestamp,x,y,theta\n"
+      "0.000000,0.0,0.0,0.0\n"
+      "0.100000,0.1,0.0,0.0\n"
+      "0.200000,0.2,0.0,0.1\n";
+  constexpr std::string_view kMeta = R"({"format_version": 1, "scenario": "fuzz", "seed": 1, "frame_changed": [0, 0, 1]})";
+  const std::filesystem::path root = ScratchDir() / "dataset";
+  std::filesystem::create_directories(root / "images");
+  for (const char* image : {"000000.png", "000001.png", "000002.png"}) WriteFile(root / "images" / image, "");
+  WriteFile(root / "frames.csv", kFrames);
+  WriteFile(root / "odometry.csv", kPoses);
+  WriteFile(root / "groundtruth.csv", kPoses);
+  WriteFile(root / "meta.json", kMeta);
+  constexpr const char* kNames[] = {"frames.csv", "odometry.csv", "groundtruth.csv", "meta.json"};
+  WriteFile(root / kNames[static_cast<unsigned char>(input[0]) % 4], input.substr(1));
+  try {
+    const Dataset d = ReadDataset(root);
+    PosesAtFrames(d, d.odometry);
+  } catch (const FileError&) {
+  }
+}
+
+// Sweep configurations (YAML, JSON) and sweep CSVs, by the first byte.
+inline void Sweep(std::string_view input) {
+  if (input.empty()) return;
+  const int kind = static_cast<unsigned char>(input[0]) % 3;
+  constexpr const char* kNames[] = {"sweep.yaml", "sweep.json", "runs.csv"};
+  const std::filesystem::path path = ScratchDir() / kNames[kind];
+  WriteFile(path, input.substr(1));
+  try {
+    if (kind == 2) {
+      ReadSweepCsv(path);
+    } else {
+      ReadSweepConfigFile(path);
+    }
+  } catch (const FileError&) {
+  }
+}
+
+// A vocabulary file (the whole input).
+inline void VocabularyFile(std::string_view input) {
+  const std::filesystem::path path = ScratchDir() / "vocabulary.yml";
+  WriteFile(path, input);
+  try {
+    Vocabulary::Load(path);
+  } catch (const FileError&) {
+  }
+}
+
+}  // namespace catgraph::fuzz
+
+#endif  // CATGRAPH_FUZZ_FUZZ_INPUTS_H_

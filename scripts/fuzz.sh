@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang, AddressSanitizer + UndefinedBehaviorSanitizer)
+# and runs each for a bounded time, two at a time (docs/fuzzing.md).
+#
+#   bash scripts/fuzz.sh [SECONDS] [TARGET...]
+#
+# SECONDS per target (default 60); TARGETs among graph trajectory scenario
+# dataset sweep vocabulary (default all). The seed corpus is made from the
+# project's own test fixtures, scenarios, sweep configurations and files the
+# release build (build/apps/catgraph, when present) generates; each run grows
+# build-fuzz/corpus/TARGET. A crash, leak, hang (> 10 s), out-of-memory
+# (> 2 GB) or sanitizer report leaves its input in build-fuzz/artifacts/TARGET/
+# and makes the script exit non-zero. FUZZ_BUILD_DIR names another build folder
+# configured with clang and -DCATGRAPH_FUZZ=ON. Expects scripts/setup.sh to have
+# installed the packages (clang-14, libclang-rt-14-dev among them).
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+seconds="${1:-60}"
+shift || true
+all=(graph trajectory scenario dataset sweep vocabulary)
+targets=("$@")
+[ "${#targets[@]}" -gt 0 ] || targets=("${all[@]}")
+build_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
+catgraph="$root/build/apps/catgraph"
+
+if [ ! -f "$build_dir/CMakeCache.txt" ]; then
+  CXX=clang++-14 cmake -S "$root" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCATGRAPH_WERROR=ON \
+    -DCATGRAPH_FUZZ=ON -DCATGRAPH_BUILD_TESTS=OFF -DCATGRAPH_BUILD_BENCH=OFF >/dev/null
+fi
+cmake --build "$build_dir" -j 2 --target "${targets[@]/%/_fuzzer}"
+
+# seed TARGET PREFIX_BYTE FILE...: FILE with the reader-choosing first byte.
+seed() {
+  local target="$1" prefix="$2"; shift 2
+  mkdir -p "$build_dir/corpus/$target"
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    { printf "\\x$prefix"; cat "$f"; } > "$build_dir/corpus/$target/seed-$prefix-$(basename "$f")"
+  done
+}
+generated="$build_dir/generated"
+if [ -x "$catgraph" ] && [ ! -f "$generated/done" ]; then
+  rm -rf "$generated" && mkdir -p "$generated"
+  "$catgraph" generate-graph --poses 60 -o "$generated/graph.g2o" --truth "$generated/truth.g2o" >/dev/null
+  "$catgraph" inject "$generated/graph.g2o" -o "$generated/spoiled.g2o" --outliers 5 --switchable \
+    --labels "$generated/labels.csv" >/dev/null
+  "$catgraph" export "$generated/truth.g2o" -o "$generated/truth.tum" >/dev/null
+  "$catgraph" simulate --scenario office-change --frames 40 -o "$generated/dataset" --quiet >/dev/null
+  "$catgraph" vocabulary train "$generated/dataset" -o "$generated/vocabulary.yml" --words 8 --every 2 \
+    --iterations 3 --quiet >/dev/null
+  touch "$generated/done"
+fi
+seed graph 00 "$root"/tests/fixtures/*.g2o "$generated/graph.g2o" "$generated/spoiled.g2o"
+seed graph 04 "$root"/tests/fixtures/*.graph
+seed trajectory 00 "$generated/truth.g2o" "$generated/truth.tum"
+seed trajectory 04 "$generated/labels.csv"
+seed scenario 00 "$root"/simulation/scenarios/*.yaml
+for i in 0 1 2 3; do
+  files=("$generated/dataset/frames.csv" "$generated/dataset/odometry.csv" \
+         "$generated/dataset/groundtruth.csv" "$generated/dataset/meta.json")
+  seed dataset "0$i" "${files[$i]}"
+done
+seed sweep 00 "$root"/docs/experiments/*.yaml
+seed sweep 02 "$root"/docs/experiments/*.csv
+seed vocabulary 00 "$generated/vocabulary.yml"
+# Inputs that once found a bug, as they are (they carry their first byte).
+for t in "${all[@]}"; do
+  if [ -d "$root/tests/fixtures/fuzz/$t" ]; then
+    mkdir -p "$build_dir/corpus/$t" && cp "$root/tests/fixtures/fuzz/$t"/* "$build_dir/corpus/$t/"
+  fi
+done
+# The scenario and vocabulary readers take the whole input as the file.
+for t in scenario vocabulary; do
+  for f in "$build_dir/corpus/$t"/seed-00-*; do [ -f "$f" ] && tail -c +2 "$f" > "$f.tmp" && mv "$f.tmp" "$f"; done
+done
+
+dict_of() {
+  case "$1" in
+    graph|trajectory) echo "-dict=$root/fuzz/graph.dict" ;;
+    scenario|sweep) echo "-dict=$root/fuzz/yaml.dict" ;;
+  esac
+}
+run() {
+  local t="$1"
+  mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
+  # shellcheck disable=SC2046
+  "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+    -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") "$build_dir/corpus/$t" \
+    >"$build_dir/$t.log" 2>&1
+}
+status=0
+pids=()
+names=()
+for t in "${targets[@]}"; do
+  run "$t" & pids+=($!); names+=("$t")
+  if [ "${#pids[@]}" -eq 2 ]; then
+    wait "${pids[0]}" || status=1
+    pids=("${pids[1]}")
+  fi
+done
+for p in "${pids[@]}"; do wait "$p" || status=1; done
+printf '%-12s %14s %10s %s\n' target executions exec/s result
+for t in "${targets[@]}"; do
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | grep -o '[0-9]*$' || echo 0)
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$build_dir/$t.log" | grep -o '[0-9]*$' || echo 0)
+  if grep -qE 'ERROR: (libFuzzer|AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer)|runtime error:|Test unit written' "$build_dir/$t.log"; then
+    result="FINDING: $build_dir/$t.log"
+    status=1
+  else
+    result=ok
+  fi
+  printf '%-12s %14s %10s %s\n' "$t" "$runs" "$rate" "$result"
+done
+exit "$status"
