@@ -5,7 +5,9 @@
 #
 #   scripts/setup.sh demo    install, build, run the main job (README command 1)
 #   scripts/setup.sh test    install, build, run the whole test suite, then
-#                            again under AddressSanitizer + UBSan (README command 2)
+#                            build it with clang under AddressSanitizer + UBSan
+#                            and run it again, then every fuzz target for a
+#                            minute (README command 2; docs/fuzzing.md)
 #   scripts/setup.sh build   install and build only
 #
 # Idempotent; works as root or through sudo. Environment: CATGRAPH_JOBS (build
@@ -68,9 +70,14 @@ case "$mode" in
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
-    echo "setup: the suite again under AddressSanitizer + UndefinedBehaviorSanitizer"
-    configure_and_build "$build_dir-sanitize" -DCATGRAPH_SANITIZE=ON -DCATGRAPH_BUILD_BENCH=OFF
+    # One clang build serves both: the suite under the sanitizers and the
+    # libFuzzer targets (CATGRAPH_FUZZ implies CATGRAPH_SANITIZE).
+    echo "setup: the suite again under AddressSanitizer + UndefinedBehaviorSanitizer (clang)"
+    configure_and_build "$build_dir-sanitize" -DCMAKE_CXX_COMPILER=clang++-14 -DCATGRAPH_FUZZ=ON \
+      -DCATGRAPH_BUILD_BENCH=OFF
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       ctest --test-dir "$build_dir-sanitize" -j "$jobs" --output-on-failure
+    echo "setup: every fuzz target for 60 s"
+    FUZZ_BUILD_DIR="$build_dir-sanitize" bash "$root/scripts/fuzz.sh" 60
     ;;
 esac

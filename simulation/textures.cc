@@ -198,7 +198,8 @@ void Window(Canvas& c, Dice& d, double x0, double w) {
   c.Segment(x0 + 0.1, (z0 + z1) / 2, x0 + w - 0.1, (z0 + z1) / 2, cv::Scalar(70, 70, 70), 0.03);
   for (int i = d.Int(1, 3); i > 0; --i) {  // blinds and what is behind
     const double bx = x0 + d.Uniform(0.1, w - 0.3);
-    c.Rect(bx, z0 + 0.05, bx + 0.2, z1 - d.Uniform(0.2, 0.8), d.Pale());
+    const cv::Scalar colour = d.Pale();
+    c.Rect(bx, z0 + 0.05, bx + 0.2, z1 - d.Uniform(0.2, 0.8), colour);
   }
 }
 
