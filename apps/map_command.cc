@@ -4,14 +4,12 @@
 // (odometry, visual and inferred closures), the robust solve under the
 // closure hierarchy, then the corrected graph, the trajectory, report.json,
 // the CAT-Graph+ paper's figures and an index.html. docs/mapping.md.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <string>
 

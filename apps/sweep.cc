@@ -21,6 +21,7 @@
 #include "backend/evaluation.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/file_error.h"
+#include "backend/io/internal/text_line.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/trajectory_io.h"
 
@@ -355,15 +356,15 @@ plot::Axes SweepAxes(const std::string& policy, const std::string& y_label) {
 
 SweepConfig ReadSweepConfigFile(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::ifstream in(path);
-  if (!in) throw FileError(name, 0, "cannot open; expected a sweep configuration (JSON or YAML)");
+  // A configuration is a few hundred bytes; 1 MB bounds what a hostile one costs.
+  const std::string text = ReadWholeFile(path, std::uintmax_t{1} << 20, "a sweep configuration (JSON or YAML)");
   const std::string ext = path.extension().string();
   nlohmann::json j;
   try {
     if (ext == ".yaml" || ext == ".yml") {
-      j = YamlToJson(YAML::Load(in));
+      j = YamlToJson(YAML::Load(text));
     } else {
-      j = nlohmann::json::parse(in);
+      j = nlohmann::json::parse(text);
     }
   } catch (const YAML::Exception& e) {
     throw FileError(name, e.mark.line + 1, "invalid YAML: " + e.msg);

@@ -1,8 +1,11 @@
 #include "frontend/vocabulary.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
 #include <numeric>
+#include <optional>
+#include <utility>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -74,9 +77,56 @@ Vocabulary::Vocabulary(FeatureType feature, cv::Mat centres, ChowLiuTree tree)
   }
 }
 
+namespace {
+
+constexpr std::uintmax_t kMaxImageBytes = std::uintmax_t{256} << 20;
+constexpr std::uint64_t kMaxImagePixels = std::uint64_t{1} << 26;  // 67 megapixels
+
+std::uint32_t BigEndian(const std::string& b, std::size_t at, int bytes) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
+  return v;
+}
+
+// Width and height a PNG or JPEG header declares, read before anything is
+// decoded (a small file can declare 100 000 x 100 000 pixels); nullopt for
+// other formats and headers it cannot follow, which OpenCV then judges.
+std::optional<std::pair<std::uint32_t, std::uint32_t>> DeclaredSize(const std::string& b) {
+  if (b.size() >= 24 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 && b.compare(12, 4, "IHDR") == 0) {
+    return std::pair{BigEndian(b, 16, 4), BigEndian(b, 20, 4)};
+  }
+  if (b.size() < 4 || static_cast<unsigned char>(b[0]) != 0xFF || static_cast<unsigned char>(b[1]) != 0xD8) {
+    return std::nullopt;
+  }
+  // JPEG: walk the marker segments to the first start-of-frame.
+  std::size_t at = 2;
+  while (at + 9 <= b.size() && static_cast<unsigned char>(b[at]) == 0xFF) {
+    const unsigned marker = static_cast<unsigned char>(b[at + 1]);
+    const bool start_of_frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (start_of_frame) return std::pair{BigEndian(b, at + 7, 2), BigEndian(b, at + 5, 2)};
+    at += 2 + BigEndian(b, at + 2, 2);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 cv::Mat ReadImage(const std::filesystem::path& path) {
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-  if (image.empty()) throw FileError(path.string(), 0, "cannot decode the image");
+  const std::string name = path.string();
+  const std::string bytes = ReadWholeFile(path, kMaxImageBytes, "an image (PNG, JPEG, ...)");
+  if (const auto size = DeclaredSize(bytes);
+      size && std::uint64_t{size->first} * std::uint64_t{size->second} > kMaxImagePixels) {
+    throw FileError(name, 0, "declares " + std::to_string(size->first) + " x " + std::to_string(size->second) +
+                                 " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
+  }
+  cv::Mat image;
+  try {
+    image = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
+                         cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw FileError(name, 0, "cannot decode the image: " + e.msg);
+  }
+  if (image.empty()) throw FileError(name, 0, "cannot decode the image");
   return image;
 }
 

@@ -42,7 +42,8 @@ struct VocabularyOptions {
 };
 
 // An image file as colour (BGR); throws FileError naming the file when it
-// cannot be read or decoded.
+// cannot be read or decoded, is larger than 256 MB, or (PNG, JPEG) declares
+// more than 2^26 pixels, checked before anything is decoded.
 cv::Mat ReadImage(const std::filesystem::path& path);
 
 // Descriptors of an image (colour or grey; detected on grey), one CV_32F row

@@ -1,0 +1,76 @@
+// Files that declare absurd sizes get a clear error, not an out-of-memory
+// kill: an image header claiming 100 000 x 100 000 pixels, a 100 MB line, a
+// pose id of 2^41, an oversized configuration. Issue #9; docs/fuzzing.md.
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/catch.h"
+
+#include "apps/sweep.h"
+#include "backend/io/dataset.h"
+#include "backend/io/file_error.h"
+#include "backend/io/graph_io.h"
+#include "frontend/vocabulary.h"
+#include "tests/test_support.h"
+
+namespace catgraph {
+namespace {
+
+std::string BigEndian32(std::uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)};
+}
+
+TEST_CASE("an image header declaring 100 000 x 100 000 pixels is refused before decoding", "[io][bad-input][bounds]") {
+  const auto dir = testing::TempDir("bounds_image");
+  // PNG: signature, then the IHDR chunk with width and height.
+  std::ofstream(dir / "huge.png", std::ios::binary)
+      << std::string("\x89PNG\r\n\x1a\n", 8) << BigEndian32(13) << "IHDR" << BigEndian32(100000) << BigEndian32(100000)
+      << std::string("\x08\x02\x00\x00\x00", 5) << BigEndian32(0);
+  CHECK_THROWS_WITH(ReadImage(dir / "huge.png"), Catch::Contains("huge.png: declares 100000 x 100000 pixels"));
+  // JPEG: start of image, an APP0 segment, then a baseline start of frame
+  // with height 60 000 and width 50 000.
+  std::ofstream(dir / "huge.jpg", std::ios::binary)
+      << std::string("\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08", 13) << std::string("\xEA\x60", 2)
+      << std::string("\xC3\x50", 2) << std::string("\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 10);
+  CHECK_THROWS_WITH(ReadImage(dir / "huge.jpg"), Catch::Contains("huge.jpg: declares 50000 x 60000 pixels"));
+  // A header that is fine but data that is not: OpenCV's verdict, as FileError.
+  std::ofstream(dir / "cut.png", std::ios::binary)
+      << std::string("\x89PNG\r\n\x1a\n", 8) << BigEndian32(13) << "IHDR" << BigEndian32(10) << BigEndian32(10);
+  CHECK_THROWS_WITH(ReadImage(dir / "cut.png"), Catch::Contains("cut.png: cannot decode the image"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a 100 MB line in a dataset table is refused naming the line", "[io][bad-input][bounds]") {
+  const auto dir = testing::TempDir("bounds_line");
+  std::ofstream(dir / "meta.json") << R"({"format_version": 1, "frame_changed": [0]})";
+  {
+    std::ofstream f(dir / "frames.csv");
+    f << "timestamp,image,traversal,changed,changed_fraction\n0.0,images/";
+    const std::string chunk(1 << 20, 'a');
+    for (int i = 0; i < 100; ++i) f << chunk;
+    f << ".png,1,0,0.0\n";
+  }
+  CHECK_THROWS_WITH(ReadDataset(dir), Catch::Contains("frames.csv:2:") && Catch::Contains("longer than"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("pose ids are sparse up to 2^40 and refused beyond", "[io][bad-input][bounds]") {
+  std::istringstream billion("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1000000000 1 0 0\nEDGE_SE2 0 1000000000 1 0 0 1 0 0 1 0 1\n");
+  const GraphFile file = ReadGraph(billion, "billion.g2o");
+  CHECK(std::get<PoseGraph2>(file.graph).vertices.size() == 2);
+  std::istringstream beyond("VERTEX_SE2 2199023255552 0 0 0\n");  // 2^41
+  CHECK_THROWS_WITH(ReadGraph(beyond, "beyond.g2o"), Catch::Contains("beyond.g2o:1:"));
+}
+
+TEST_CASE("a sweep configuration larger than 1 MB is refused", "[io][bad-input][bounds]") {
+  const auto dir = testing::TempDir("bounds_sweep");
+  std::ofstream(dir / "sweep.yaml") << "# " << std::string(2 << 20, 'x') << "\noutput: runs.csv\n";
+  CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "sweep.yaml"), Catch::Contains("expected at most 1048576"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace catgraph
