@@ -68,6 +68,24 @@ std::vector<T> ListOf(const nlohmann::json& j, const char* key, Parse parse) {
   return values;
 }
 
+// An integer in [lo, hi]. nlohmann's get<int>() of 8e22 is undefined
+// behaviour and "seeds: 1e15" would be a loop of 10^15 (found by fuzzing).
+std::int64_t IntegerIn(const nlohmann::json& v, const std::string& what, std::int64_t lo, std::int64_t hi) {
+  const bool integer = v.is_number_integer() &&
+                       !(v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi));
+  if (!integer || v.get<std::int64_t>() < lo || v.get<std::int64_t>() > hi) {
+    throw std::invalid_argument("'" + what + "' must be an integer from " + std::to_string(lo) + " to " +
+                                std::to_string(hi) + ", not " + v.dump());
+  }
+  return v.get<std::int64_t>();
+}
+
+// IntegerIn for an optional key.
+std::int64_t IntegerIn(const nlohmann::json& j, const char* key, std::int64_t fallback, std::int64_t lo,
+                       std::int64_t hi) {
+  return j.contains(key) ? IntegerIn(j.at(key), key, lo, hi) : fallback;
+}
+
 OutlierOptions OutlierOptionsFor(const SweepConfig& c, OutlierPolicy policy, int count,
                                  std::uint64_t seed) {
   OutlierOptions o;
@@ -127,30 +145,32 @@ SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& ba
   }
   if (j.contains("outliers")) {
     c.outliers = ListOf<int>(j, "outliers", [](const nlohmann::json& n) {
-      const int v = n.get<int>();
-      if (v < 0) throw std::invalid_argument("outlier counts must be >= 0");
-      return v;
+      return static_cast<int>(IntegerIn(n, "outliers", 0, 10'000'000));
     });
   }
   if (j.contains("seeds")) {
-    if (j.at("seeds").is_number_integer()) {  // "seeds: 5" means 1 ... 5
+    if (j.at("seeds").is_number()) {  // "seeds: 5" means 1 ... 5
       c.seeds.clear();
-      for (std::uint64_t s = 1; s <= j.at("seeds").get<std::uint64_t>(); ++s) c.seeds.push_back(s);
-      if (c.seeds.empty()) throw std::invalid_argument("'seeds' must be >= 1");
+      const auto count = IntegerIn(j.at("seeds"), "seeds", 1, 100'000);
+      for (std::int64_t s = 1; s <= count; ++s) c.seeds.push_back(static_cast<std::uint64_t>(s));
     } else {
       c.seeds = ListOf<std::uint64_t>(j, "seeds", [](const nlohmann::json& s) {
+        if (!s.is_number_integer() || (!s.is_number_unsigned() && s.get<std::int64_t>() < 0)) {
+          throw std::invalid_argument("'seeds' must list integers >= 0, not " + s.dump());
+        }
         return s.get<std::uint64_t>();
       });
     }
   }
-  c.group_size = j.value("group_size", 0);
-  c.local_window = j.value("local_window", 20);
+  c.group_size = static_cast<int>(IntegerIn(j, "group_size", 0, 0, 1'000'000));
+  c.local_window = static_cast<int>(IntegerIn(j, "local_window", 20, 0, 1'000'000));
   if (j.contains("init")) {
     const auto init = InitialGuessFromString(j.at("init").get<std::string>());
     if (!init) throw std::invalid_argument("unknown init '" + j.at("init").get<std::string>() + "'");
     c.optimizer.initial_guess = *init;
   }
-  c.optimizer.solver.max_iterations = j.value("max_iterations", c.optimizer.solver.max_iterations);
+  c.optimizer.solver.max_iterations =
+      static_cast<int>(IntegerIn(j, "max_iterations", c.optimizer.solver.max_iterations, 0, 1'000'000));
   c.optimizer.switch_gate_probability =
       j.value("switch_gate_probability", c.optimizer.switch_gate_probability);
   c.optimizer.refine = j.value("refine", c.optimizer.refine);

@@ -14,6 +14,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "backend/graph/name_table.h"
 #include "backend/io/atomic_file.h"
@@ -41,16 +42,6 @@ cv::Ptr<cv::Feature2D> MakeDetector(FeatureType type) {
     case FeatureType::kKaze: return cv::KAZE::create();
   }
   return cv::SIFT::create();
-}
-
-// A sequence node element by element (OpenCV's operator>> into a vector
-// trips GCC 12's -Wnull-dereference inside libstdc++).
-template <typename T>
-std::vector<T> ReadSequence(const cv::FileNode& node) {
-  std::vector<T> values;
-  if (!node.isSeq()) return values;
-  for (auto it = node.begin(); it != node.end(); ++it) values.push_back(static_cast<T>(*it));
-  return values;
 }
 
 }  // namespace
@@ -214,38 +205,53 @@ void Vocabulary::Save(const std::filesystem::path& path) const {
 
 Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
   const std::string name = path.string();
-  const std::string text =
-      ReadWholeFile(path, kMaxFileBytes, "a vocabulary file (catgraph vocabulary train)");
+  std::string text = ReadWholeFile(path, kMaxFileBytes, "a vocabulary file (catgraph vocabulary train)");
+  // The file is OpenCV's YAML, written by Save, but it is read with yaml-cpp:
+  // OpenCV 4.6's parser loops for ever on some 45-byte inputs and allocates
+  // whatever size a matrix header declares (both found by fuzzing,
+  // docs/fuzzing.md). OpenCV's first line "%YAML:1.0" is not a YAML
+  // directive; it is blanked, which keeps the line numbers.
+  if (text.rfind("%YAML:", 0) == 0) text.erase(0, text.find('\n'));
+  int line = 0;  // of the node being read, for errors
+  auto at = [&](const YAML::Node& node) -> const YAML::Node& {
+    if (node.IsDefined()) line = node.Mark().line + 1;
+    return node;
+  };
   try {
-    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    int version = 0;
-    fs["format_version"] >> version;
+    const YAML::Node doc = YAML::Load(text);
+    if (!doc.IsMap()) throw FileError(name, 0, "expected a catgraph vocabulary (a YAML mapping)");
+    const int version = doc["format_version"] ? at(doc["format_version"]).as<int>() : 0;
     if (version != kFormatVersion) {
-      throw FileError(name, 0, "format_version " + std::to_string(version) + "; expected " +
-                                   std::to_string(kFormatVersion) + " (a catgraph vocabulary)");
+      throw FileError(name, line, "format_version " + std::to_string(version) + "; expected " +
+                                      std::to_string(kFormatVersion) + " (a catgraph vocabulary)");
     }
-    std::string feature;
-    fs["feature"] >> feature;
-    // The matrix's declared size against the values it holds, before OpenCV
-    // allocates it (a hostile file declares rows: 1e18; found by fuzzing).
-    const cv::FileNode centres_node = fs["centres"];
-    if (!centres_node.isMap() || !centres_node["rows"].isInt() || !centres_node["cols"].isInt() ||
-        !centres_node["data"].isSeq()) {
-      throw FileError(name, 0, "centres: expected an !!opencv-matrix with rows, cols and data");
+    const std::string feature = at(doc["feature"]).as<std::string>();
+    const YAML::Node c = at(doc["centres"]);
+    if (!c.IsMap() || !c["rows"] || !c["cols"] || !c["data"] || !c["data"].IsSequence()) {
+      throw FileError(name, line, "centres: expected an !!opencv-matrix with rows, cols and data");
     }
-    const int rows = centres_node["rows"], cols = centres_node["cols"];
-    const std::size_t values = centres_node["data"].size();
-    if (rows < 0 || cols < 0 || static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) != values) {
-      throw FileError(name, 0, "centres: " + std::to_string(rows) + " rows x " + std::to_string(cols) +
-                                   " columns declared, " + std::to_string(values) + " values given");
+    const long long rows = at(c["rows"]).as<long long>(), cols = at(c["cols"]).as<long long>();
+    const YAML::Node data = at(c["data"]);
+    const auto values = static_cast<long long>(data.size());
+    if (rows < 0 || cols < 0 || rows > values || cols > values || rows * cols != values) {
+      throw FileError(name, line, "centres: " + std::to_string(rows) + " rows x " + std::to_string(cols) +
+                                      " columns declared, " + std::to_string(values) + " values given");
     }
-    cv::Mat centres;
-    centres_node >> centres;
+    if (values > 0 && (!c["dt"] || at(c["dt"]).as<std::string>() != "f")) {
+      throw FileError(name, line, "centres: expected dt: f (32-bit floats)");
+    }
+    cv::Mat centres(static_cast<int>(rows), static_cast<int>(cols), CV_32F);
+    float* out = values > 0 ? centres.ptr<float>() : nullptr;
+    for (const YAML::Node& v : data) *out++ = static_cast<float>(at(v).as<double>());  // as OpenCV reads them
+    auto sequence = [&]<typename T>(const char* key, T) {
+      const YAML::Node node = at(doc[key]);
+      return node.IsSequence() ? node.as<std::vector<T>>() : std::vector<T>{};
+    };
     ChowLiuTree tree;
-    tree.parent = ReadSequence<int>(fs["tree_parent"]);
-    tree.p_z = ReadSequence<double>(fs["tree_p_z"]);
-    tree.p_z_given_parent_on = ReadSequence<double>(fs["tree_p_z_given_parent_on"]);
-    tree.p_z_given_parent_off = ReadSequence<double>(fs["tree_p_z_given_parent_off"]);
+    tree.parent = sequence("tree_parent", int{});
+    tree.p_z = sequence("tree_p_z", double{});
+    tree.p_z_given_parent_on = sequence("tree_p_z_given_parent_on", double{});
+    tree.p_z_given_parent_off = sequence("tree_p_z_given_parent_off", double{});
     for (std::size_t q = 0; q < tree.parent.size(); ++q) {
       const int p = tree.parent[q];
       if (p < -1 || p >= static_cast<int>(tree.parent.size()) || p == static_cast<int>(q)) {
@@ -260,13 +266,13 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
     }
     if (!centres.empty() && !cv::checkRange(centres)) throw FileError(name, 0, "centres hold NaN or infinity");
     return {FeatureTypeFromString(feature), centres, std::move(tree)};
+  } catch (const YAML::Exception& e) {
+    throw FileError(name, e.mark.line >= 0 ? e.mark.line + 1 : line,
+                    "expected a catgraph vocabulary (OpenCV YAML): " + e.msg);
   } catch (const cv::Exception& e) {
-    throw FileError(name, 0, "expected a catgraph vocabulary (OpenCV YAML): " + e.msg);
+    throw FileError(name, 0, "expected a catgraph vocabulary: " + e.msg);
   } catch (const std::invalid_argument& e) {
     throw FileError(name, 0, e.what());
-  } catch (const std::length_error& e) {
-    // OpenCV's YAML parser on some malformed input (fuzzing, docs/fuzzing.md).
-    throw FileError(name, 0, std::string("expected a catgraph vocabulary (OpenCV YAML); OpenCV failed: ") + e.what());
   }
 }
 
