@@ -11,7 +11,8 @@
 # build-fuzz/corpus/TARGET. A crash, leak, hang (> 10 s), out-of-memory
 # (> 2 GB) or sanitizer report leaves its input in build-fuzz/artifacts/TARGET/
 # and makes the script exit non-zero. FUZZ_BUILD_DIR names another build folder
-# configured with clang and -DCATGRAPH_FUZZ=ON. Expects scripts/setup.sh to have
+# configured with clang and -DCATGRAPH_FUZZ=ON; FUZZ_SEED fixes libFuzzer's
+# random seed (default 0: a new one each run). Expects scripts/setup.sh to have
 # installed the packages (clang-14, libclang-rt-14-dev among them).
 set -euo pipefail
 
@@ -86,6 +87,7 @@ run() {
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
   # shellcheck disable=SC2046
   "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+    -seed="${FUZZ_SEED:-0}" \
     -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") "$build_dir/corpus/$t" \
     >"$build_dir/$t.log" 2>&1
 }
