@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -50,23 +51,23 @@ std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& d, const Cat
            t.path_m[now] - t.path_m[old] >= filter.exclusion_window_m;
   };
 
-  // The old stretch starting at j that frames k..end are taken for, if it
-  // qualifies; its last frame, or 0.
-  auto old_stretch = [&](std::size_t k, std::size_t end, std::size_t j) -> std::size_t {
+  // The last frame of the old stretch from j that frames k..end are taken
+  // for, if it qualifies.
+  auto old_stretch = [&](std::size_t k, std::size_t end, std::size_t j) -> std::optional<std::size_t> {
     std::size_t c = j;
     for (std::size_t i = k; i <= end; ++i) {
       while (c + 1 < n && t.path_m[c] - t.path_m[j] < t.path_m[i] - t.path_m[k]) ++c;
       // The filters stand on the edge from c to c + 1: both in one run, old enough.
-      if (c + 1 >= n || run[c + 1] != run[j] || !older(c + 1, i)) return 0;
+      if (c + 1 >= n || run[c + 1] != run[j] || !older(c + 1, i)) return std::nullopt;
       const Pose2 now = t.odometry[k].Between(t.odometry[i]), then = t.odometry[j].Between(t.odometry[c]);
       if ((now.translation() - then.translation()).norm() > o.shape_tolerance_m ||
           std::abs(WrapAngle(now.theta() - then.theta())) > o.shape_tolerance_rad) {
-        return 0;
+        return std::nullopt;
       }
       const double error = (t.truth[i].translation() - t.truth[c].translation()).norm();
-      if (error < o.min_error_m || error > o.max_error_m) return 0;
+      if (error < o.min_error_m || error > o.max_error_m) return std::nullopt;
       const double gate = OdometricGateRadius(filter, t.path_m[i] - t.path_m[c]) - filter.hypothesis_radius_m;
-      if ((t.odometry[i].translation() - t.odometry[c].translation()).norm() > gate) return 0;
+      if ((t.odometry[i].translation() - t.odometry[c].translation()).norm() > gate) return std::nullopt;
     }
     return c;
   };
@@ -89,7 +90,7 @@ std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& d, const Cat
     if (!apart) continue;
     qualifying.clear();
     for (std::size_t j = 0; j < k && older(j, k); ++j) {
-      if (const std::size_t c = old_stretch(k, end, j); c > 0) qualifying.emplace_back(j, c);
+      if (const auto c = old_stretch(k, end, j)) qualifying.emplace_back(j, *c);
     }
     if (qualifying.empty()) continue;
     const auto [j, c] = qualifying[std::uniform_int_distribution<std::size_t>(0, qualifying.size() - 1)(rng)];
