@@ -123,6 +123,8 @@ class MapReader {
   // Every key of the mapping must have been read.
   void Finish() const {
     for (const auto& kv : node_) {
+      // A key may be a list or a mapping in YAML (found by fuzzing).
+      if (!kv.first.IsScalar()) Fail(kv.first, "expected a plain key, not a list or a mapping");
       const std::string key = kv.first.as<std::string>();
       if (!used_.count(key)) Fail(kv.first, "unknown key '" + key + "'");
     }
