@@ -136,12 +136,12 @@ void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const
   CreateDirectories(dir, "output directory");
   WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
     f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
-         "matched_frame,error_m,inference_pending\n";
+         "matched_frame,error_m,inference_pending,log_evidence\n";
     for (const auto& h : r.frames) {
       f << h.frame << ',' << h.traversal << ',' << h.edge_from_frame << ',' << h.edge_to_frame << ','
         << Number(h.best.alpha) << ',' << h.best.direction << ',' << Number(h.best.value) << ','
         << Number(h.new_place_probability) << ',' << (h.closure ? 1 : 0) << ',' << h.matched_frame << ','
-        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << '\n';
+        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << ',' << Number(h.log_evidence) << '\n';
     }
   });
   nlohmann::ordered_json closures = nlohmann::ordered_json::array();

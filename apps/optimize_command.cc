@@ -18,7 +18,7 @@ struct OptimizeOptions {
   std::string output;
   std::string format = "auto";
   std::string method = "switchable";
-  std::string init = "file";
+  std::string init = "auto";
   std::string cost = "g2o";
   std::string report;
   bool drop_rejected = false;
@@ -33,6 +33,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["output"] = o.output;
   j["method"] = o.method;
   j["init"] = o.init;
+  j["initial_guess"] = ToString(r.initial_guess);
   j["termination"] = r.summary.IsUsable() ? "usable" : "failed";
   j["message"] = r.summary.message;
   j["iterations"] = r.summary.iterations;
@@ -84,7 +85,8 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
     out << ReportJson(options, result, false).dump(2) << '\n';
     return;
   }
-  out << "optimised " << options.input << " with " << options.method << ": "
+  out << "optimised " << options.input << " with " << options.method << " from the "
+      << ToString(result.initial_guess) << " initial guess: "
       << result.summary.BriefReport() << '\n'
       << (result.refinement ? "refined without the rejected closures: " +
                                    result.refinement->BriefReport() + "\n"
@@ -111,8 +113,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--init", o->init,
                   "Initial guess: the file's poses (missing ones chained along a spanning "
-                  "tree), spanning-tree for all, or chordal (rotation-first)")
-      ->check(CLI::IsMember({"file", "spanning-tree", "chordal"}))
+                  "tree), spanning-tree for all, chordal (rotation-first), or auto: file or "
+                  "chordal, whichever has the lower robust cost")
+      ->check(CLI::IsMember({"auto", "file", "spanning-tree", "chordal"}))
       ->capture_default_str();
   cmd->add_option("--cost", o->cost,
                   "Objective: g2o (full information) or chordal (SE-Sync's F, compares with "

@@ -117,10 +117,11 @@ double LossDerivative(const RobustLoss& loss, double chi2) {
   return 1.0;
 }
 
-constexpr NameTable<InitialGuess, 3> kInitialGuessNames = {{
+constexpr NameTable<InitialGuess, 4> kInitialGuessNames = {{
     {InitialGuess::kFile, "file"},
     {InitialGuess::kSpanningTree, "spanning-tree"},
     {InitialGuess::kChordal, "chordal"},
+    {InitialGuess::kAuto, "auto"},
 }};
 
 // Truncated least squares by graduated non-convexity (Yang, Antonante,
@@ -186,14 +187,41 @@ Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& optio
   return total;
 }
 
-template <typename PoseT>
-PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
-  switch (options.initial_guess) {
+// Sets the graph's poses as `guess` says; returns the guess used (kAuto's
+// choice). `truncation` is the chi2 at which kAuto's cost of a robust
+// constraint stops growing.
+template <typename PoseT, typename IsRobust>
+InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, double truncation, IsRobust robust) {
+  switch (guess) {
     case InitialGuess::kFile: InitializeBySpanningTree(graph); break;
     case InitialGuess::kSpanningTree: InitializeBySpanningTree(graph, /*overwrite=*/true); break;
     case InitialGuess::kChordal: InitializeChordal(graph); break;
+    case InitialGuess::kAuto: {
+      InitializeBySpanningTree(graph);
+      PoseGraph<PoseT> chordal = graph;
+      try {
+        InitializeChordal(chordal);
+      } catch (const std::invalid_argument&) {
+        return InitialGuess::kFile;  // disconnected: only the file's poses exist
+      }
+      auto cost = [&](const PoseGraph<PoseT>& g) {
+        double sum = 0.0;
+        for (const auto& c : g.constraints) {
+          const double chi2 = EdgeChi2(g, c);
+          sum += robust(c) ? std::min(chi2, truncation) : chi2;
+        }
+        return sum;
+      };
+      if (cost(chordal) >= cost(graph)) return InitialGuess::kFile;
+      graph.vertices = std::move(chordal.vertices);
+      return InitialGuess::kChordal;
+    }
   }
-  const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
+  return guess;
+}
+
+template <typename PoseT>
+PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
   const bool switchable = options.method == RobustMethod::kSwitchable;
   // The chi2 gate every method decides at (docs/backend.md).
   const double gate = ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
@@ -201,6 +229,13 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
   };
+  const bool any_robust = options.method != RobustMethod::kNone ||
+                          std::any_of(graph.constraints.begin(), graph.constraints.end(),
+                                      [](const auto& c) { return c.switch_id.has_value(); });
+  const InitialGuess initial_guess = Initialize(
+      graph, options.initial_guess, any_robust ? gate : std::numeric_limits<double>::infinity(),
+      [&](const Constraint<PoseT>& c) { return robust(c) || c.switch_id.has_value(); });
+  const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
 
   if (switchable) {
     const double switch_information =
@@ -345,6 +380,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     out.closures.push_back(d);
   }
   out.summary = summary;
+  out.initial_guess = initial_guess;
 
   // Refinement: the decisions stand; the poses are re-solved by plain least
   // squares over the odometry and the accepted closures at full weight, so

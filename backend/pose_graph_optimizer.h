@@ -37,6 +37,12 @@ enum class InitialGuess {
   kFile,          // the file's poses; missing ones chained along a spanning tree
   kSpanningTree,  // every pose chained along a spanning tree, odometry first
   kChordal,       // chordal (rotation-first) initialisation of every pose
+  // kFile or kChordal, whichever has the lower robust cost: chi2 of the
+  // trusted constraints plus, for the robust ones, min(chi2, gate) (the
+  // truncated least-squares cost the gate decides by; plain chi2 for
+  // method none). A file's poorly chained odometry (MIT) loses to chordal;
+  // a chordal guess bent by false closures loses to the file's.
+  kAuto,
 };
 
 std::string_view ToString(InitialGuess guess);
@@ -44,7 +50,7 @@ std::optional<InitialGuess> InitialGuessFromString(std::string_view text);
 
 struct PoseGraphOptimizerOptions {
   RobustMethod method = RobustMethod::kSwitchable;
-  InitialGuess initial_guess = InitialGuess::kFile;
+  InitialGuess initial_guess = InitialGuess::kAuto;
   // The objective of constraints without a switch; kChordal is SE-Sync's F
   // (not available with switchable constraints).
   RelativePoseCostType cost = RelativePoseCostType::kG2o;
@@ -116,6 +122,8 @@ struct PoseGraphOptimization {
   // The input with optimised poses; with switches (new and old) and their
   // solved values; new switches are attached to their constraints.
   AnyPoseGraph graph;
+  // The initial guess used: kAuto's choice, or the one asked for.
+  InitialGuess initial_guess = InitialGuess::kFile;
   Summary summary;  // the robust solve
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.

@@ -329,6 +329,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
       mapped_mass_ * options_.leave_probability + (1.0 - mapped_mass_) * options_.new_place_prior;
   const double log_keep = std::log(1.0 - prior_new);
   if (!restart) MotionAndProjection(particles_, u, rng_);
+  double log_mixture = kNegInf;  // log sum_i w_i p(z | particle i), for log_evidence
   for (Particle& p : particles_) {
     if (p.log_weight == kNegInf) continue;
     const GraphEdge& e = graph_.edge(p.edge);
@@ -342,8 +343,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
         reversed ? likelihood.LogNewPlaceLikelihood()
                  : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
                              p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
+    log_mixture = LogSumExp(log_mixture, p.log_weight + log_observation);
     p.log_weight += log_observation + log_keep;
   }
+  step.log_evidence = log_mixture == kNegInf ? std::numeric_limits<double>::quiet_NaN()
+                                             : log_mixture - likelihood.LogNewPlaceLikelihood();
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
   if (!restart) {

@@ -136,6 +136,11 @@ struct CatGraphStep {
   int node = -1;                   // the node added for this frame
   LocationHypothesis best;
   double new_place_probability = 1.0;
+  // How much better the particles explain this frame than FAB-MAP's mean
+  // field (an unremarkable new place), in nats: log sum_i w_i p(z | particle
+  // i) - log p(z | mean field), before priors and the new-place offset;
+  // NaN while no particle is on the map.
+  double log_evidence = 0.0;
   bool closure = false;
   int matched_node = -1;           // the nearer end of the matched edge
   Pose2 T_node_matched;            // matched node in the frame of the new node

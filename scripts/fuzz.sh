@@ -4,7 +4,9 @@
 #
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]
 #
-# SECONDS per target (default 60); TARGETs among graph trajectory scenario
+# SECONDS per target (default 60; 0 for no time limit); FUZZ_RUNS, when set,
+# stops each target after that many executions instead (the long documented
+# runs: FUZZ_RUNS=10000000 bash scripts/fuzz.sh 0). TARGETs among graph trajectory scenario
 # dataset sweep vocabulary (default all). The seed corpus is made from the
 # project's own test fixtures, scenarios, sweep configurations and files the
 # release build (build/apps/catgraph, when present) generates; each run grows
@@ -86,7 +88,7 @@ run() {
   local t="$1"
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
   # shellcheck disable=SC2046
-  "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
     -seed="${FUZZ_SEED:-0}" \
     -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") "$build_dir/corpus/$t" \
     >"$build_dir/$t.log" 2>&1

@@ -136,6 +136,7 @@ struct RawGraph {
   struct EdgeLine {
     int line;
     Constraint<PoseT> constraint;
+    bool explicit_id = false;  // from a metadata comment; otherwise the edge's position
   };
   struct ReferenceLine {
     int line;
@@ -228,7 +229,7 @@ void GraphParser<PoseT>::AddEdge(const Line& line, const std::optional<ClosureMe
     c.kind = metadata->kind;
     c.provenance = metadata->provenance;
   }
-  raw_.edges.push_back({line.number(), std::move(c)});
+  raw_.edges.push_back({line.number(), std::move(c), metadata.has_value()});
 }
 
 template <typename PoseT>
@@ -326,8 +327,20 @@ PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line) const {
     it->second.prior = prior;
   }
   const bool edges_only = raw_.vertices.empty();
+  // An edge without a metadata comment is known by its position among the
+  // edges, unless a commented edge holds that id (an edge appended to a file
+  // catgraph wrote, which numbers closures sparsely): then by the next id
+  // above every id in the file.
+  std::set<ClosureId> explicit_ids;
+  for (const auto& e : raw_.edges) {
+    if (e.explicit_id) explicit_ids.insert(e.constraint.id);
+  }
+  std::int64_t next_free = explicit_ids.empty() ? 0 : explicit_ids.rbegin()->value() + 1;
+  next_free = std::max(next_free, static_cast<std::int64_t>(raw_.edges.size()));
   std::set<ClosureId> closure_ids;
-  for (const auto& [line, constraint] : raw_.edges) {
+  for (const auto& [line, read, explicit_id] : raw_.edges) {
+    Constraint<PoseT> constraint = read;
+    if (!explicit_id && explicit_ids.contains(constraint.id)) constraint.id = ClosureId(next_free++);
     for (const PoseId end : {constraint.from, constraint.to}) {
       if (graph.vertices.contains(end)) continue;
       if (!edges_only) {
@@ -353,7 +366,7 @@ PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line) const {
     if (!closure_ids.insert(constraint.id).second) {
       throw FileError(file_, line, "duplicate closure id " + std::to_string(constraint.id.value()));
     }
-    graph.constraints.push_back(constraint);
+    graph.constraints.push_back(std::move(constraint));
   }
   for (const auto& [line, id] : raw_.fixes) {
     auto it = graph.vertices.find(PoseId(id));

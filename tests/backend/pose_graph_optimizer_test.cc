@@ -215,6 +215,51 @@ TEST_CASE("chordal initialisation escapes the local minima of MIT and M3500b",
   CHECK(OptimizePoseGraph(ReadGraphFile(root / "se-sync/MIT.g2o").graph, options).chi2 > 1000.0);
 }
 
+TEST_CASE("the auto initial guess takes chordal on a clean graph and the file's poses among "
+          "false closures",
+          "[backend][init]") {
+  ManhattanWorldOptions world;
+  world.num_poses = 500;
+  world.seed = 9;
+  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
+  PoseGraphOptimizerOptions options;  // kAuto by default
+  REQUIRE(options.initial_guess == InitialGuess::kAuto);
+  // Clean: the chordal guess explains the closures better than chained odometry.
+  CHECK(OptimizePoseGraph(sim.graph, options).initial_guess == InitialGuess::kChordal);
+  // 50 false closures bend the chordal guess (it is a least-squares fit to
+  // every edge); the truncated cost prefers the file's poses, and the result
+  // is the file's.
+  OutlierOptions outliers;
+  outliers.count = 50;
+  outliers.seed = 3;
+  std::set<ClosureId> injected;
+  for (const InjectedClosure& c : InjectOutliers(sim.graph, outliers)) injected.insert(c.id);
+  const PoseGraphOptimization automatic = OptimizePoseGraph(sim.graph, options);
+  CHECK(automatic.initial_guess == InitialGuess::kFile);
+  options.initial_guess = InitialGuess::kFile;
+  const PoseGraphOptimization file = OptimizePoseGraph(sim.graph, options);
+  CHECK(file.initial_guess == InitialGuess::kFile);
+  CHECK(automatic.chi2 == file.chi2);
+  for (const auto& d : automatic.closures) {
+    if (injected.contains(d.id)) CHECK(!d.accepted);
+  }
+}
+
+TEST_CASE("with the default initial guess, switchable constraints keep every closure of MIT",
+          "[backend][init][shared]") {
+  CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
+  const AnyPoseGraph mit = ReadGraphFile(root / "se-sync/MIT.g2o").graph;
+  const PoseGraphOptimization r = OptimizePoseGraph(mit);
+  CHECK(r.initial_guess == InitialGuess::kChordal);
+  CHECK(r.rejected == 0);
+  CHECK(r.accepted == 20);
+  // From the file's poses the switches settle in a local minimum: the
+  // reason kAuto is the default.
+  PoseGraphOptimizerOptions file;
+  file.initial_guess = InitialGuess::kFile;
+  CHECK(OptimizePoseGraph(mit, file).rejected > 0);
+}
+
 // Plain least squares on SE-Sync's cost from the chordal initial guess.
 PoseGraphOptimizerOptions ChordalCostOptions() {
   PoseGraphOptimizerOptions options;

@@ -149,6 +149,23 @@ TEST_CASE("closure kinds and provenance survive write and read", "[io][g2o]") {
   CHECK(testing::GraphsEqual(AnyPoseGraph(g), RoundTrip(g)));
 }
 
+TEST_CASE("an edge appended to a file catgraph wrote gets an id of its own", "[io][g2o]") {
+  // catgraph numbers closures sparsely (ids survive dropping); an edge a user
+  // appends has no id comment, and its position (3) is taken.
+  const auto file = ReadString(
+      "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\n"
+      "#CATGRAPH_CLOSURE 0 odometry\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n"
+      "#CATGRAPH_CLOSURE 3 visual\nEDGE_SE2 2 0 -2 0 0 1 0 0 1 0 1\n"
+      "EDGE_SE2 1 2 1 0 0 1 0 0 1 0 1\n"
+      "EDGE_SE2 2 1 -1 0 0 1 0 0 1 0 1\n");
+  const auto& g = std::get<PoseGraph2>(file.graph);
+  REQUIRE(g.constraints.size() == 4);
+  CHECK(g.constraints[0].id == ClosureId(0));
+  CHECK(g.constraints[1].id == ClosureId(3));
+  CHECK(g.constraints[2].id == ClosureId(2));  // its position, free
+  CHECK(g.constraints[3].id == ClosureId(4));  // its position (3) is taken: next above all
+}
+
 TEST_CASE("random 2D and 3D graphs round-trip exactly", "[io][g2o]") {
   std::mt19937_64 rng(6);
   for (int trial = 0; trial < 20; ++trial) {
