@@ -40,7 +40,7 @@ Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std:
   return v;
 }
 
-LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
+FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
   const Vocabulary vocabulary = VocabularyFor(d, o, out);
   auto features = std::make_shared<ProgressBar>("frames: features");
   auto filter = std::make_shared<ProgressBar>("frames: filter");
@@ -50,7 +50,12 @@ LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, 
     };
   }
   o.localization.threads = o.threads;
-  return Localize(d, vocabulary, o.localization);
+  return {ExtractWords(d, vocabulary, o.localization), FabMapModel(vocabulary.tree(), FabMapOptions{})};
+}
+
+LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
+  const FrontEndInputs in = PrepareFrontEnd(d, o, out);
+  return Localize(d, in.words, in.model, o.localization);
 }
 
 // The CAT-Graph+ paper's Figs. 7 and 8: the best hypothesis of every frame,
@@ -128,6 +133,7 @@ nlohmann::ordered_json ClosureJson(const LoopClosure& c) {
   j["error_m"] = std::isnan(c.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(c.error_m);
   if (c.kind == ClosureKind::kOdometryInferred) j["parents"] = c.parents;
   if (c.injected) j["injected"] = true;
+  if (c.vetoed) j["vetoed"] = true;
   return j;
 }
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -38,8 +39,19 @@ void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o);
 // on the traversals localised against it.
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out);
 
-// The vocabulary, then CAT-Graph (and CAT-Graph+) over the dataset with
-// progress bars unless `o.quiet`.
+// What the filter reads, made once for several runs over a dataset: the
+// words of every frame and the observation model of the vocabulary.
+struct FrontEndInputs {
+  std::vector<WordSet> words;
+  FabMapModel model;
+};
+
+// The vocabulary (VocabularyFor) and the words of every frame, with
+// progress bars unless `o.quiet` (which also shows the filter's progress in
+// later runs with `o.localization`).
+FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
+
+// PrepareFrontEnd, then CAT-Graph (and CAT-Graph+) over the dataset.
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
 
 // The CAT-Graph+ paper's Figs. 7, 8 and 11: the hypothesis per frame, and

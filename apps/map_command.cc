@@ -37,6 +37,7 @@ struct MapCommandOptions {
   std::string hierarchy = "cascade";
   PoseGraphOptimizerOptions optimizer;
   FalseMatchOptions injection;  // its seed is the filter's
+  int feedback_reruns = 3;      // MapWithFeedback's max_reruns
 };
 
 // `estimate` moved so that its first pose is the truth's first pose, for
@@ -140,14 +141,28 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
       << d.frames.size() << " frames";
   if (o.injection.count > 0) out << ", " << o.injection.count << " false visual matches injected";
   out << "\n";
-  const LocalizationResult r = RunLocalization(d, o.front, out);
-  WriteLocalization(dir, d, r, o.front.localization.filter.closure_threshold);
-  PrintLocalizationSummary(d, r, o.front.localization.filter.odometric_inference, out);
+  const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
+  LocalizationResult first = Localize(d, inputs.words, inputs.model, o.front.localization);
+  PrintLocalizationSummary(d, first, o.front.localization.filter.odometric_inference, out);
 
-  out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on " << r.graph.vertices.size()
-      << " poses and " << r.closures.size() << " closures\n";
+  out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on "
+      << first.graph.vertices.size() << " poses and " << first.closures.size() << " closures\n";
   const Trajectory2 truth = TruthAtFrames(d);
-  const MapOutcome m = SolveMap(r, optimizer, hierarchy_options, truth);
+  const FedBackMap fed = MapWithFeedback(d, inputs.words, inputs.model, o.front.localization, std::move(first),
+                                         optimizer, hierarchy_options, truth, o.feedback_reruns);
+  const LocalizationResult& r = fed.front;
+  const MapOutcome& m = fed.outcome;
+  std::vector<int> vetoed_frames;
+  for (const LoopClosure& c : r.closures) {
+    if (c.vetoed) vetoed_frames.push_back(c.frame);
+  }
+  if (fed.reruns > 0) {
+    out << "feedback: CAT-Graph+ re-run " << fed.reruns << (fed.reruns == 1 ? " time" : " times") << " with the "
+        << vetoed_frames.size() << " rejected visual closures vetoed; now "
+        << m.by_kind.at(ClosureKind::kOdometryInferred).count << " inferred closures (were "
+        << fed.first.by_kind.at(ClosureKind::kOdometryInferred).count << ")\n";
+  }
+  WriteLocalization(dir, d, r, o.front.localization.filter.closure_threshold);
   const HierarchicalOptimization& solved = m.solved;
   const PoseGraphOptimization& result = solved.optimization;
   const PoseGraph2& corrected = std::get<PoseGraph2>(result.graph);
@@ -158,7 +173,9 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   } else {
     out << " (" << solved.turned_off.size() << " turned off by the hierarchy)\n";
   }
-  const InjectionOutcome& injection = m.injection;
+  // What the hierarchy did to the false closures' children: the first solve
+  // (after feedback the false closures are vetoed and have none).
+  const InjectionOutcome& injection = fed.first.injection;
   if (o.injection.count > 0) {
     out << "injected: " << injection.parents_rejected << " of " << injection.parents
         << " false visual closures rejected; " << injection.children_accepted << " of their " << injection.children
@@ -226,7 +243,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
                                 {"ate_odometry", AteJson(m.ate_odometry)},
                                 {"ate_corrected", AteJson(m.ate_corrected)},
                                 {"turned_off", decisions_json(solved.turned_off)},
-                                {"surviving_children", decisions_json(solved.surviving_children)}};
+                                {"surviving_children", decisions_json(solved.surviving_children)},
+                                {"feedback", {{"reruns", fed.reruns}, {"vetoed_frames", vetoed_frames}}}};
   if (o.injection.count > 0) {
     nlohmann::ordered_json matches = nlohmann::ordered_json::array();
     for (const FalseVisualMatch& f : o.front.localization.false_matches) {
@@ -326,6 +344,11 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   AddFalseMatchOptions(*cmd, o->injection);
+  cmd->add_option("--feedback-reruns", o->feedback_reruns,
+                  "cascade and coupled: re-run CAT-Graph+ with the visual closures the back end rejected vetoed, "
+                  "and solve again, at most this many times (0: off). docs/mapping.md")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->front.quiet, "No progress bars");
   cmd->callback([o, &out] { RunMap(*o, out); });

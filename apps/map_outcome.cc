@@ -14,22 +14,15 @@ Trajectory2 TruthAtFrames(const Dataset& d) {
   return truth;
 }
 
-std::set<ClosureId> InjectedAndChildren(const LocalizationResult& r) {
-  std::set<ClosureId> out;
-  for (const LoopClosure& c : r.closures) {  // children come after their parents
-    if (c.injected || std::any_of(c.parents.begin(), c.parents.end(),
-                                  [&](int p) { return out.count(ClosureId(p)) > 0; })) {
-      out.insert(ClosureId(c.id));
-    }
-  }
-  return out;
-}
-
 MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions& optimizer,
                     const HierarchyOptions& hierarchy, const Trajectory2& truth) {
   MapOutcome m;
   const AnyPoseGraph front_graph(r.graph);
-  m.solved = OptimizeWithHierarchy(front_graph, ClosureHierarchy::FromGraph(front_graph), optimizer, hierarchy);
+  PoseGraphOptimizerOptions held_off = optimizer;
+  for (const LoopClosure& c : r.closures) {
+    if (c.vetoed) held_off.disabled_closures.insert(ClosureId(c.id));
+  }
+  m.solved = OptimizeWithHierarchy(front_graph, ClosureHierarchy::FromGraph(front_graph), held_off, hierarchy);
   const PoseGraphOptimization& result = m.solved.optimization;
   if (!result.summary.IsUsable()) throw std::runtime_error("the solver failed: " + result.summary.message);
   for (const ClosureDecision& c : result.closures) m.decision_of.emplace(c.id, c);
@@ -75,6 +68,28 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
     m.ate_corrected = EvaluateTrajectory(TrajectoryOf(std::get<PoseGraph2>(result.graph)), truth);
   }
   return m;
+}
+
+FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
+                           LocalizationOptions localization, LocalizationResult front,
+                           const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                           const Trajectory2& truth, int max_reruns) {
+  FedBackMap out;
+  out.outcome = SolveMap(front, optimizer, hierarchy, truth);
+  out.first = out.outcome;
+  while (hierarchy.policy != HierarchyPolicy::kFlat && out.reruns < max_reruns) {
+    bool vetoed_more = false;
+    for (const LoopClosure& c : front.closures) {
+      if (c.kind != ClosureKind::kVisual || out.outcome.decision_of.at(ClosureId(c.id)).accepted) continue;
+      vetoed_more = localization.vetoed_frames.insert(c.frame).second || vetoed_more;
+    }
+    if (!vetoed_more) break;
+    front = Localize(d, words, model, localization);
+    ++out.reruns;
+    out.outcome = SolveMap(front, optimizer, hierarchy, truth);
+  }
+  out.front = std::move(front);
+  return out;
 }
 
 HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer) {

@@ -55,15 +55,33 @@ struct MapOutcome {
   std::optional<TrajectoryEvaluation> ate_odometry, ate_corrected;  // with ground truth
 };
 
-// The injected false visual closures and every inferred closure with one of
-// them as a parent: what an oracle would leave out.
-std::set<ClosureId> InjectedAndChildren(const LocalizationResult& r);
-
 // Solves the front end's graph under the hierarchy and scores it against
-// `truth` (TruthAtFrames; may be empty). Throws std::runtime_error when the
-// solver fails.
+// `truth` (TruthAtFrames; may be empty); vetoed closures are held off
+// (rejected, as the back end decided before). Throws std::runtime_error when
+// the solver fails.
 MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions& optimizer,
                     const HierarchyOptions& hierarchy, const Trajectory2& truth);
+
+// The back end's verdict fed back to CAT-Graph+. A false visual closure
+// does harm beyond its own edge and its children: CAT-Graph+ validated the
+// pending inferences at it (d_tot), discarding true ones that disagree, and
+// re-initialised its odometric filter there. Hierarchy policies cascade and
+// coupled turn the children off; feedback then re-runs the front end with the
+// rejected visual closures vetoed (LocalizationOptions::vetoed_frames), so
+// CAT-Graph+ carries its inferences across them to the next closure, and
+// solves again with the vetoed closures held off; until the back end rejects
+// no further visual closure, or after `max_reruns` re-runs. Policy flat (the
+// comparison without a hierarchy) is solved once.
+struct FedBackMap {
+  LocalizationResult front;  // the last front-end run
+  MapOutcome outcome;        // its solve
+  MapOutcome first;          // the first solve, before any re-run
+  int reruns = 0;
+};
+FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
+                           LocalizationOptions localization, LocalizationResult front,
+                           const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                           const Trajectory2& truth, int max_reruns);
 
 }  // namespace catgraph
 

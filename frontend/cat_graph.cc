@@ -413,7 +413,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   } else {
     for (Particle& p : particles_) p.log_weight -= std::log(sum);  // normalised among particles
   }
-  if (options_.odometric_inference) OdometricStep(restart ? Pose2() : u, step);
+  if (options_.odometric_inference) OdometricStep(restart ? Pose2() : u, step.closure && !aliasing.vetoed, step);
   return step;
 }
 
@@ -430,8 +430,8 @@ std::pair<int, Pose2> CatGraphFilter::LoopTo(const LocationHypothesis& h) {
   return {matched, HypothesisPose(h)->Between(local_.PoseOf(matched))};
 }
 
-void CatGraphFilter::OdometricStep(const Pose2& u, CatGraphStep& step) {
-  if (step.closure) {
+void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& step) {
+  if (closure) {
     // Total-path validation (§3.4): the odometric hypothesis against the
     // visual match, in a local graph around the match.
     if (reference_node_ >= 0 && !pending_.empty()) {

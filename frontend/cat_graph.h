@@ -52,8 +52,12 @@ struct CatGraphOptions {
   double ess_threshold = 0.3;              // T_ess, a fraction of n_p; (0, 1]
   double new_place_prior = 0.5;            // p_new (spec §6.3) while in a new place; (0, 1)
   // Prior mass of new place while the robot was localised on the map (the
-  // chance of leaving it in one frame) [D]; (0, 1).
-  double leave_probability = 0.05;
+  // chance of leaving it in one frame) [D]; (0, 1). Small, so that one weak
+  // frame does not take the robot off the map: with the offset below, a
+  // frame must score 45 nats over the mean field to bring it onto the map,
+  // and under 45 - ln((1 - h) / h) = 22 nats (or a few frames under 45) to
+  // take it off (docs/frontend.md).
+  double leave_probability = 1e-10;
   // Added to log p(z | new place) [D, docs/frontend.md]: FAB-MAP's mean field
   // scores a corridor frame far below the places a few metres along the same
   // corridor, which share its far view. Nats; chosen for 500-word SIFT
@@ -130,6 +134,12 @@ struct Aliasing {
   // The filter's own closure, if it makes one, is withheld (the frames
   // between a pair of false matches, while the aliasing lasts).
   bool withhold_closure = false;
+  // A visual closure at this frame is still reported but kept out of
+  // CAT-Graph+: it neither validates the pending inferences nor
+  // re-initialises the odometric filter, which carries on from the last
+  // closure before it. For closures the back end rejected (a re-run of the
+  // front end with the back end's verdict, docs/mapping.md).
+  bool vetoed = false;
 };
 
 struct CatGraphStep {
@@ -193,7 +203,8 @@ class CatGraphFilter {
   // node's pose in the hypothesis' frame.
   std::pair<int, Pose2> LoopTo(const LocationHypothesis& h);
   // CAT-Graph+ after the visual step (spec §3).
-  void OdometricStep(const Pose2& u, CatGraphStep& step);
+  // `closure`: a visual closure CAT-Graph+ may use was made this step.
+  void OdometricStep(const Pose2& u, bool closure, CatGraphStep& step);
 
   const FabMapModel& model_;
   CatGraphOptions options_;

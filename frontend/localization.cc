@@ -81,6 +81,12 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
     aliasing[static_cast<std::size_t>(m.last_frame)].false_match = m.matched_last_frame;
     injected[static_cast<std::size_t>(m.first_frame)] = injected[static_cast<std::size_t>(m.last_frame)] = true;
   }
+  for (const int f : options.vetoed_frames) {
+    if (f < 0 || static_cast<std::size_t>(f) >= d.frames.size()) {
+      throw std::invalid_argument("Localize: vetoed frame " + std::to_string(f) + " is not a frame of the dataset");
+    }
+    aliasing[static_cast<std::size_t>(f)].vetoed = true;
+  }
   CatGraphFilter filter(model, options.filter);
   LocalizationResult result;
   std::vector<std::size_t> sizes;
@@ -150,6 +156,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
       c.hypothesis = step.best.value;
       c.error_m = f.error_m;
       c.injected = injected[k];
+      c.vetoed = aliasing[k].vetoed;
       add_closure(c);
       // CAT-Graph+: what this visual closure validated or discarded.
       const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);

@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <limits>
+#include <set>
 #include <vector>
 
 #include "backend/graph/pose_graph.h"
@@ -46,6 +47,7 @@ struct LoopClosure {
   // Inferred: the visual closure it hangs from and the one that validated it.
   std::vector<int> parents;
   bool injected = false;          // a false visual match of LocalizationOptions::false_matches
+  bool vetoed = false;            // visual, at a frame of LocalizationOptions::vetoed_frames
 };
 
 // Inferences that passed local validation but failed total-path validation.
@@ -96,6 +98,10 @@ struct LocalizationOptions {
   // Perceptual aliasing imposed on the filter (false_matches.h); empty:
   // none. Checked against the dataset's frames.
   std::vector<FalseVisualMatch> false_matches;
+  // Frames whose visual closure CAT-Graph+ must not use (Aliasing::vetoed):
+  // the frames of visual closures the back end rejected. The closures are
+  // still made and reported, flagged `vetoed`.
+  std::set<int> vetoed_frames;
   int threads = 0;                // feature extraction; 0: every core
   // Called from the calling thread: stage is "features" or "filter".
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;

@@ -209,8 +209,15 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
   CHECK(visual > 0);
 }
 
-TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Graph+ carries it between the pair",
-          "[frontend][catgraph][catgraph-plus][false-matches]") {
+// The ring's second lap, 20 m to 22 m along it, taken for 17 m to 19 m of
+// the first by a pair of false matches (node ids are frame indices here);
+// closures at `vetoed` frames are kept out of CAT-Graph+.
+struct AliasedRingRun {
+  int first = 0, last = 0, back = 0;
+  std::vector<CatGraphStep> steps;
+};
+
+AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}) {
   RingWorld world;
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options;
@@ -218,17 +225,30 @@ TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Gra
   options.new_place_log_offset = 0.0;
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
-  // Second lap, 20 m to 22 m along the ring, taken for 17 m to 19 m of the
-  // first (node ids are frame indices here).
-  const int first = per_lap + 200, last = per_lap + 220, back = per_lap + 30;
-  std::vector<CatGraphStep> steps;
-  for (int k = 0; k <= last + 20; ++k) {
+  AliasedRingRun run{per_lap + 200, per_lap + 220, per_lap + 30, {}};
+  for (int k = 0; k <= run.last + 20; ++k) {
     Aliasing aliasing;
-    if (k >= first && k <= last) aliasing.withhold_closure = true;
-    if (k == first || k == last) aliasing.false_match = k - back;
-    steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep),
-                                aliasing));
+    if (k >= run.first && k <= run.last) aliasing.withhold_closure = true;
+    if (k == run.first || k == run.last) aliasing.false_match = k - run.back;
+    aliasing.vetoed = vetoed.contains(k);
+    run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(),
+                                    world.Observe(k * RingWorld::kStep), aliasing));
   }
+  if (vetoed.empty()) {
+    // Aliasing onto the robot's own recent frames is refused.
+    Aliasing recent;
+    recent.false_match = run.last + 15;
+    CHECK_THROWS_AS(filter.Step(run.last + 21, 0.25 * (run.last + 21), RingWorld::Step(), world.Observe(0.0), recent),
+                    std::invalid_argument);
+  }
+  return run;
+}
+
+TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Graph+ carries it between the pair",
+          "[frontend][catgraph][catgraph-plus][false-matches]") {
+  const AliasedRingRun run = RunAliasedRing();
+  const int first = run.first, last = run.last, back = run.back;
+  const std::vector<CatGraphStep>& steps = run.steps;
   for (const int k : {first, last}) {
     const CatGraphStep& s = steps[static_cast<std::size_t>(k)];
     CAPTURE(k);
@@ -249,11 +269,52 @@ TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Gra
     CHECK(c.node < last);
     CHECK(RingDistance(c.node, c.matched_node) == Approx(3.0).margin(0.3));
   }
-  // Aliasing onto the robot's own recent frames is refused.
-  Aliasing recent;
-  recent.false_match = last + 15;
-  CHECK_THROWS_AS(filter.Step(last + 21, 0.25 * (last + 21), RingWorld::Step(), world.Observe(0.0), recent),
-                  std::invalid_argument);
+}
+
+TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inferences across it",
+          "[frontend][catgraph][catgraph-plus][false-matches]") {
+  // As catgraph map's feedback does: veto the pair, then also the closures
+  // the filter makes while it is still lost after it (3 m off: a back end
+  // rejects them), and run again.
+  const AliasedRingRun plain = RunAliasedRing();
+  std::set<int> vetoed{plain.first, plain.last};
+  const AliasedRingRun once = RunAliasedRing(vetoed);
+  for (int k = once.last + 1; k < static_cast<int>(once.steps.size()); ++k) {
+    const CatGraphStep& s = once.steps[static_cast<std::size_t>(k)];
+    if (s.closure && RingDistance(k, s.matched_node) > 1.0) vetoed.insert(k);
+  }
+  REQUIRE(vetoed.size() > 2);
+  const AliasedRingRun run = RunAliasedRing(vetoed);
+  int reference = -1, after = -1;
+  for (std::size_t k = 0; k < run.steps.size(); ++k) {
+    const CatGraphStep& s = run.steps[k];
+    CAPTURE(k);
+    // The visual filter is unchanged: the same closures, vetoed or not.
+    CHECK(s.closure == plain.steps[k].closure);
+    CHECK(s.matched_node == plain.steps[k].matched_node);
+    if (vetoed.contains(static_cast<int>(k))) {
+      // Neither validates, discards nor re-initialises.
+      CHECK(s.inferred.empty());
+      CHECK(s.discarded.empty());
+      continue;
+    }
+    CHECK_FALSE(vetoed.contains(s.reference_node));
+    if (s.closure && static_cast<int>(k) < run.first) reference = static_cast<int>(k);
+    if (s.closure && static_cast<int>(k) > run.last && after < 0) after = static_cast<int>(k);
+  }
+  // The first closure the back end keeps after the pair validates the whole
+  // stretch from the last one before it, where the robot really was.
+  REQUIRE(after > run.last);
+  const CatGraphStep& end = run.steps[static_cast<std::size_t>(after)];
+  CHECK(end.reference_node == reference);
+  CHECK(end.discarded.empty());
+  std::set<int> carried;
+  for (const InferredClosure& c : end.inferred) {
+    CAPTURE(c.node, c.matched_node);
+    CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
+    carried.insert(c.node);
+  }
+  for (int k = run.first; k <= run.last; ++k) CHECK(carried.contains(k));
 }
 
 TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",
