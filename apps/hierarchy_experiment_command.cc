@@ -197,7 +197,7 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
       ->capture_default_str();
   cmd->add_option("--method", o->method, "Robust method for loop closures (as catgraph optimize)")
-      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
+      ->check(CLI::IsMember(RobustMethodNames()))
       ->capture_default_str();
   AddFalseMatchOptions(*cmd, o->injection);
   AddLocalizationOptions(*cmd, o->front);

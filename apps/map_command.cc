@@ -335,7 +335,7 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
       ->capture_default_str();
   cmd->add_option("--method", o->method, "Robust method for loop closures (as catgraph optimize)")
-      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
+      ->check(CLI::IsMember(RobustMethodNames()))
       ->capture_default_str();
   AddLocalizationOptions(*cmd, o->front);
   cmd->add_option("--inject-false-visual", o->injection.count,

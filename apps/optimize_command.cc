@@ -109,7 +109,7 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("-o,--output", o->output, "Corrected graph (g2o)")->required();
   AddGraphFormatOption(*cmd, o->format);
   cmd->add_option("--method", o->method, "Robust method for loop closures")
-      ->check(CLI::IsMember({"none", "switchable", "dcs", "cauchy", "huber", "gnc"}))
+      ->check(CLI::IsMember(RobustMethodNames()))
       ->capture_default_str();
   cmd->add_option("--init", o->init,
                   "Initial guess: the file's poses (missing ones chained along a spanning "

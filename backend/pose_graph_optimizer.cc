@@ -452,6 +452,8 @@ std::optional<RobustMethod> RobustMethodFromString(std::string_view text) {
   return ValueOf(kMethodNames, text);
 }
 
+std::vector<std::string> RobustMethodNames() { return NamesOf(kMethodNames); }
+
 std::string_view ToString(InitialGuess guess) { return NameOf(kInitialGuessNames, guess); }
 
 std::optional<InitialGuess> InitialGuessFromString(std::string_view text) {

@@ -12,6 +12,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -32,6 +33,7 @@ enum class RobustMethod {
 
 std::string_view ToString(RobustMethod method);
 std::optional<RobustMethod> RobustMethodFromString(std::string_view text);
+std::vector<std::string> RobustMethodNames();  // every spelling RobustMethodFromString accepts
 
 enum class InitialGuess {
   kFile,          // the file's poses; missing ones chained along a spanning tree

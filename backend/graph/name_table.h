@@ -5,8 +5,10 @@
 #include <array>
 #include <cstddef>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace catgraph {
 
@@ -28,6 +30,14 @@ constexpr std::optional<Enum> ValueOf(const NameTable<Enum, N>& table, std::stri
     if (n == name) return v;
   }
   return std::nullopt;
+}
+
+// Every name, in table order (for the command line's choices).
+template <typename Enum, std::size_t N>
+std::vector<std::string> NamesOf(const NameTable<Enum, N>& table) {
+  std::vector<std::string> names;
+  for (const auto& [v, name] : table) names.emplace_back(name);
+  return names;
 }
 
 }  // namespace catgraph
