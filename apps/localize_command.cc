@@ -95,12 +95,13 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
       "extracted once: false inferences per cell, as the CAT-Graph+ paper's Table III (sweep.csv, table.md).");
   cmd->add_option("dataset", o->base.dataset, "Dataset directory (with ground truth)")->required();
   cmd->add_option("-o,--output", o->base.output, "Output directory")->required();
-  cmd->add_option("--vocabulary", o->base.vocabulary, "Vocabulary file; default: as catgraph localize");
+  // Every filter option of localize, but the two tolerances swept.
+  AddLocalizationOptions(*cmd, o->base);
+  for (const char* swept : {"--d-tot", "--d-loc", "--no-odometric-inference"}) cmd->remove_option(cmd->get_option(swept));
   cmd->add_option("--d-tot", o->d_tot, "d_tot values (m)")->delimiter(',')->capture_default_str();
   cmd->add_option("--d-loc", o->d_loc, "d_loc values (m)")->delimiter(',')->capture_default_str();
   cmd->add_option("--false-threshold", o->false_threshold_m, "An inference farther than this from the truth is false (m)")
       ->capture_default_str();
-  cmd->add_option("--seed", o->base.localization.filter.seed, "Filter seed")->capture_default_str();
   cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
   cmd->callback([o, &out] { RunInferenceSweep(*o, out); });
