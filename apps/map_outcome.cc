@@ -77,7 +77,9 @@ FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, 
   FedBackMap out;
   out.outcome = SolveMap(front, optimizer, hierarchy, truth);
   out.first = out.outcome;
-  while (hierarchy.policy != HierarchyPolicy::kFlat && out.reruns < max_reruns) {
+  // Without CAT-Graph+ a veto changes nothing a re-run would compute.
+  const bool feedback = hierarchy.policy != HierarchyPolicy::kFlat && localization.filter.odometric_inference;
+  while (feedback && out.reruns < max_reruns) {
     bool vetoed_more = false;
     for (const LoopClosure& c : front.closures) {
       if (c.kind != ClosureKind::kVisual || out.outcome.decision_of.at(ClosureId(c.id)).accepted) continue;

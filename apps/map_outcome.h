@@ -71,7 +71,8 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
 // CAT-Graph+ carries its inferences across them to the next closure, and
 // solves again with the vetoed closures held off; until the back end rejects
 // no further visual closure, or after `max_reruns` re-runs. Policy flat (the
-// comparison without a hierarchy) is solved once.
+// comparison without a hierarchy) and a front end without CAT-Graph+ are
+// solved once.
 struct FedBackMap {
   LocalizationResult front;  // the last front-end run
   MapOutcome outcome;        // its solve
