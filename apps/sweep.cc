@@ -24,6 +24,7 @@
 #include "backend/io/internal/text_line.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/trajectory_io.h"
+#include "backend/io/json_integer.h"
 
 namespace catgraph {
 namespace {
@@ -66,24 +67,6 @@ std::vector<T> ListOf(const nlohmann::json& j, const char* key, Parse parse) {
   }
   for (const auto& item : list) values.push_back(parse(item));
   return values;
-}
-
-// An integer in [lo, hi]. nlohmann's get<int>() of 8e22 is undefined
-// behaviour and "seeds: 1e15" would be a loop of 10^15 (found by fuzzing).
-std::int64_t IntegerIn(const nlohmann::json& v, const std::string& what, std::int64_t lo, std::int64_t hi) {
-  const bool integer = v.is_number_integer() &&
-                       !(v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi));
-  if (!integer || v.get<std::int64_t>() < lo || v.get<std::int64_t>() > hi) {
-    throw std::invalid_argument("'" + what + "' must be an integer from " + std::to_string(lo) + " to " +
-                                std::to_string(hi) + ", not " + v.dump());
-  }
-  return v.get<std::int64_t>();
-}
-
-// IntegerIn for an optional key.
-std::int64_t IntegerIn(const nlohmann::json& j, const char* key, std::int64_t fallback, std::int64_t lo,
-                       std::int64_t hi) {
-  return j.contains(key) ? IntegerIn(j.at(key), key, lo, hi) : fallback;
 }
 
 OutlierOptions OutlierOptionsFor(const SweepConfig& c, OutlierPolicy policy, int count,

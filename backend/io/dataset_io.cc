@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,7 @@
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
 #include "backend/io/internal/text_line.h"
+#include "backend/io/json_integer.h"
 
 namespace catgraph {
 namespace {
@@ -148,6 +150,13 @@ std::vector<DatasetFrame> ReadFrames(const std::filesystem::path& root) {
   return frames;
 }
 
+// A furniture item's traversals: small positive integers.
+std::vector<int> Traversals(const nlohmann::json& j) {
+  std::vector<int> out;
+  for (const auto& t : j) out.push_back(static_cast<int>(IntegerIn(t, "traversals", 1, 1'000'000)));
+  return out;
+}
+
 Polygon2 PolygonFromJson(const nlohmann::json& j) {
   Polygon2 polygon;
   for (const auto& p : j) polygon.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
@@ -177,14 +186,14 @@ DatasetMeta ReadMeta(const std::filesystem::path& path) {
   DatasetMeta meta;
   try {
     if (!j.is_object()) throw std::invalid_argument("expected a JSON object at the top level");
-    meta.format_version = j.at("format_version").get<int>();
+    meta.format_version = static_cast<int>(IntegerIn(j.at("format_version"), "format_version", 0, 1'000'000));
     if (meta.format_version < 1 || meta.format_version > kDatasetFormatVersion) {
       throw std::invalid_argument("format_version " + std::to_string(meta.format_version) +
                                   " is not supported; expected 1.." +
                                   std::to_string(kDatasetFormatVersion));
     }
     meta.scenario = j.value("scenario", "");
-    meta.seed = j.value("seed", std::uint64_t{0});
+    meta.seed = static_cast<std::uint64_t>(IntegerIn(j, "seed", 0, 0, std::numeric_limits<std::int64_t>::max()));
     meta.synthetic_images = j.value("synthetic_images", false);
     meta.synthetic_odometry = j.value("synthetic_odometry", false);
     meta.synthetic_ground_truth = j.value("synthetic_ground_truth", false);
@@ -193,8 +202,8 @@ DatasetMeta ReadMeta(const std::filesystem::path& path) {
     if (j.contains("camera")) {
       const auto& c = j.at("camera");
       meta.camera.model = c.value("model", "unknown");
-      meta.camera.width_px = c.value("width_px", 0);
-      meta.camera.height_px = c.value("height_px", 0);
+      meta.camera.width_px = static_cast<int>(IntegerIn(c, "width_px", 0, 0, 1 << 20));
+      meta.camera.height_px = static_cast<int>(IntegerIn(c, "height_px", 0, 0, 1 << 20));
       meta.camera.hfov_deg = c.value("hfov_deg", 0.0);
       meta.camera.vfov_deg = c.value("vfov_deg", 0.0);
       meta.camera.height_m = c.value("height_m", 0.0);
@@ -204,7 +213,7 @@ DatasetMeta ReadMeta(const std::filesystem::path& path) {
       meta.changed_regions.push_back(
           {r.at("name").get<std::string>(), r.value("kind", ""), PolygonFromJson(r.at("polygon"))});
     }
-    for (const auto& f : j.at("frame_changed")) meta.frame_changed.push_back(f.get<int>() != 0);
+    for (const auto& f : j.at("frame_changed")) meta.frame_changed.push_back(IntegerIn(f, "frame_changed", 0, 1) != 0);
     if (j.contains("floor_plan")) {
       const auto& plan = j.at("floor_plan");
       for (const auto& w : plan.value("walls", nlohmann::json::array())) {
@@ -214,7 +223,7 @@ DatasetMeta ReadMeta(const std::filesystem::path& path) {
       for (const auto& f : plan.value("furniture", nlohmann::json::array())) {
         meta.furniture.push_back({f.at("name").get<std::string>(), PolygonFromJson(f.at("polygon")),
                                   f.value("height_m", 0.0),
-                                  f.at("traversals").get<std::vector<int>>()});
+                                  Traversals(f.at("traversals"))});
       }
     }
   } catch (const nlohmann::json::exception& e) {

@@ -108,6 +108,11 @@ TEST_CASE("inconsistent datasets are errors naming the file and the line", "[io]
   Replace(root / "meta.json", "\"format_version\": 1", "\"format_version\": 9");
   CHECK_THAT(ErrorReading(root), Catch::Contains("meta.json: format_version 9 is not supported"));
 
+  // A number beyond int's range is an error, not a cast (found by fuzzing).
+  fresh();
+  Replace(root / "meta.json", "\"format_version\": 1", "\"format_version\": 1.06e130");
+  CHECK_THAT(ErrorReading(root), Catch::Contains("meta.json: 'format_version' must be an integer from 0 to 1000000, not 1.06e+130"));
+
   fresh();
   Replace(root / "meta.json", "\"scenario\"", "\"scenario\" oops");
   CHECK_THAT(ErrorReading(root), Catch::Contains("meta.json:3: expected valid JSON"));
