@@ -92,34 +92,42 @@ inline void Scenario(std::string_view input) {
 
 // A dataset folder: the first byte picks the file (frames.csv, odometry.csv,
 // groundtruth.csv, meta.json) the rest replaces in a valid three-frame
-// dataset.
+// dataset. The valid dataset is written once per folder; each input rewrites
+// one file and puts it back afterwards (most of a run was the file system).
 inline void DatasetFolder(std::string_view input) {
   if (input.empty()) return;
-  constexpr std::string_view kFrames =
-      "timestamp,image,traversal,changed,changed_fraction\n"
-      "0.000000,images/000000.png,1,0,0.0000\n"
-      "0.100000,images/000001.png,1,0,0.0000\n"
-      "0.200000,images/000002.png,2,1,0.5000\n";
   constexpr std::string_view kPoses =
       "timestamp,x,y,theta\n"
       "0.000000,0.0,0.0,0.0\n"
       "0.100000,0.1,0.0,0.0\n"
       "0.200000,0.2,0.0,0.1\n";
-  constexpr std::string_view kMeta = R"({"format_version": 1, "scenario": "fuzz", "seed": 1, "frame_changed": [0, 0, 1]})";
+  struct File {
+    const char* name;
+    std::string_view valid;
+  };
+  constexpr File kFiles[] = {
+      {"frames.csv",
+       "timestamp,image,traversal,changed,changed_fraction\n"
+       "0.000000,images/000000.png,1,0,0.0000\n"
+       "0.100000,images/000001.png,1,0,0.0000\n"
+       "0.200000,images/000002.png,2,1,0.5000\n"},
+      {"odometry.csv", kPoses},
+      {"groundtruth.csv", kPoses},
+      {"meta.json", R"({"format_version": 1, "scenario": "fuzz", "seed": 1, "frame_changed": [0, 0, 1]})"}};
   const std::filesystem::path root = ScratchDir() / "dataset";
-  std::filesystem::create_directories(root / "images");
-  for (const char* image : {"000000.png", "000001.png", "000002.png"}) WriteFile(root / "images" / image, "");
-  WriteFile(root / "frames.csv", kFrames);
-  WriteFile(root / "odometry.csv", kPoses);
-  WriteFile(root / "groundtruth.csv", kPoses);
-  WriteFile(root / "meta.json", kMeta);
-  constexpr const char* kNames[] = {"frames.csv", "odometry.csv", "groundtruth.csv", "meta.json"};
-  WriteFile(root / kNames[static_cast<unsigned char>(input[0]) % 4], input.substr(1));
+  if (!std::filesystem::exists(root / "meta.json")) {
+    std::filesystem::create_directories(root / "images");
+    for (const char* image : {"000000.png", "000001.png", "000002.png"}) WriteFile(root / "images" / image, "");
+    for (const File& f : kFiles) WriteFile(root / f.name, f.valid);
+  }
+  const File& replaced = kFiles[static_cast<unsigned char>(input[0]) % 4];
+  WriteFile(root / replaced.name, input.substr(1));
   try {
     const Dataset d = ReadDataset(root);
     PosesAtFrames(d, d.odometry);
   } catch (const FileError&) {
   }
+  WriteFile(root / replaced.name, replaced.valid);
 }
 
 // Sweep configurations (YAML, JSON) and sweep CSVs, by the first byte.

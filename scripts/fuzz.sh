@@ -43,16 +43,16 @@ seed() {
   done
 }
 generated="$build_dir/generated"
-if [ -x "$catgraph" ] && [ ! -f "$generated/done" ]; then
+if [ -x "$catgraph" ] && [ ! -f "$generated/done-2" ]; then
   rm -rf "$generated" && mkdir -p "$generated"
   "$catgraph" generate-graph --poses 60 -o "$generated/graph.g2o" --truth "$generated/truth.g2o" >/dev/null
   "$catgraph" inject "$generated/graph.g2o" -o "$generated/spoiled.g2o" --outliers 5 --switchable \
     --labels "$generated/labels.csv" >/dev/null
   "$catgraph" export "$generated/truth.g2o" -o "$generated/truth.tum" >/dev/null
   "$catgraph" simulate --scenario office-change --frames 40 -o "$generated/dataset" --quiet >/dev/null
-  "$catgraph" vocabulary train "$generated/dataset" -o "$generated/vocabulary.yml" --words 8 --every 2 \
+  "$catgraph" vocabulary train "$generated/dataset" -o "$generated/vocabulary.yml" --words 2 --every 2 \
     --iterations 3 --quiet >/dev/null
-  touch "$generated/done"
+  touch "$generated/done-2"
 fi
 seed graph 00 "$root"/tests/fixtures/*.g2o "$generated/graph.g2o" "$generated/spoiled.g2o"
 seed graph 04 "$root"/tests/fixtures/*.graph
@@ -84,14 +84,30 @@ dict_of() {
     scenario|sweep) echo "-dict=$root/fuzz/yaml.dict" ;;
   esac
 }
+# The readers that take paths get their files in a scratch folder of each run's
+# own, in memory where /dev/shm is writable (the disk was most of a dataset
+# run), removed afterwards.
+scratch_root=/dev/shm
+[ -d "$scratch_root" ] && [ -w "$scratch_root" ] || scratch_root="${TMPDIR:-/tmp}"
+# Inputs are bounded at 8 KB where the seeds would let them grow to 77 KB
+# (sweep CSVs) or 19 KB (vocabularies): yaml-cpp's scanner is most of a run,
+# and four times as many runs at 8 KB cover more than a few at 77 KB.
+max_len_of() {
+  case "$1" in
+    sweep|vocabulary) echo "-max_len=8192" ;;
+  esac
+}
 run() {
-  local t="$1"
+  local t="$1" scratch rc=0
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
+  scratch="$(mktemp -d "$scratch_root/catgraph-fuzz-$t.XXXXXX")"
   # shellcheck disable=SC2046
-  "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
     -seed="${FUZZ_SEED:-0}" \
-    -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") "$build_dir/corpus/$t" \
-    >"$build_dir/$t.log" 2>&1
+    -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") $(max_len_of "$t") "$build_dir/corpus/$t" \
+    >"$build_dir/$t.log" 2>&1 || rc=$?
+  rm -rf "$scratch"
+  return "$rc"
 }
 status=0
 pids=()
