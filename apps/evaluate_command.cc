@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "backend/chi_square.h"
 #include "backend/evaluation.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/file_error.h"
@@ -21,6 +22,7 @@ struct EvaluateOptions {
   std::string estimate, truth, labels, report;
   std::string format = "auto";
   std::string truth_format = "auto";
+  double truth_gate_probability = 0.999;
   bool json = false;
 };
 
@@ -64,9 +66,12 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
   const TrajectoryEvaluation t = EvaluateTrajectory(estimated, truth);
   std::optional<ClosureScores> scores;
   if (!o.labels.empty()) {
-    const std::vector<ClosureOutcome> outcomes =
+    std::vector<ClosureOutcome> outcomes =
         o.report.empty() ? ClosureOutcomesOf(estimate) : OutcomesFromReport(o.report);
-    scores = ScoreClosures(outcomes, ReadClosureLabelsFile(o.labels));
+    AttachChi2AtTruth(outcomes, estimate, truth);
+    const int dof = std::holds_alternative<PoseGraph2>(estimate) ? 3 : 6;
+    scores = ScoreClosures(outcomes, ReadClosureLabelsFile(o.labels),
+                           ChiSquareQuantile(dof, o.truth_gate_probability));
   }
   constexpr double kDeg = 180.0 / std::numbers::pi;
   if (o.json) {
@@ -91,6 +96,10 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
       j["false_positives"] = scores->false_positives;
       j["true_negatives"] = scores->true_negatives;
       j["false_negatives"] = scores->false_negatives;
+      j["outlier_rejection"] = scores->outlier_rejection;
+      j["outliers_explained_by_truth"] = scores->outliers_explained_by_truth;
+      j["explained_outliers_accepted"] = scores->explained_outliers_accepted;
+      j["unexplained_outlier_rejection"] = scores->unexplained_outlier_rejection;
     }
     out << j.dump(2) << '\n';
     return;
@@ -105,7 +114,12 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
     out << "loop closures: precision " << scores->precision << ", recall " << scores->recall
         << ", F1 " << scores->f1 << " (true accepted " << scores->true_positives
         << ", false accepted " << scores->false_positives << ", false rejected "
-        << scores->true_negatives << ", true rejected " << scores->false_negatives << ")\n";
+        << scores->true_negatives << ", true rejected " << scores->false_negatives << ")\n"
+        << "outliers rejected: " << scores->outlier_rejection << "; "
+        << scores->outliers_explained_by_truth << " outliers are explained by the truth (chi2 at "
+        << "the true poses within the gate), " << scores->explained_outliers_accepted
+        << " of them accepted; of the others " << scores->unexplained_outlier_rejection
+        << " rejected\n";
   }
 }
 
@@ -130,6 +144,11 @@ void AddEvaluateCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--report", o->report,
                   "With --labels: take each closure's decision from this catgraph optimize "
                   "--report instead of the estimate's switches (for dcs, cauchy, huber)");
+  cmd->add_option("--truth-gate", o->truth_gate_probability,
+                  "With --labels: an outlier whose chi2 at the true poses is within this chi2 "
+                  "quantile counts as explained by the truth (the optimiser's default gate)")
+      ->check(CLI::Range(0.0, 1.0).description("in (0, 1)"))
+      ->capture_default_str();
   cmd->add_flag("--json", o->json,
                 "Print one JSON object (ate_rmse, rmse_anchored, precision, recall, ...)");
   cmd->callback([o, &out] { RunEvaluate(*o, out); });

@@ -32,7 +32,7 @@ struct ExperimentOptions {
   std::vector<std::string> hierarchies = {"cascade", "coupled", "flat"};
   std::vector<std::uint64_t> seeds = {1, 2, 3, 4, 5};
   FalseMatchOptions injection{.count = 10};
-  int feedback_reruns = 3;  // as catgraph map
+  int feedback_reruns = kDefaultFeedbackReruns;  // as catgraph map
 };
 
 struct Row {

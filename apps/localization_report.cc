@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "apps/progress_bar.h"
 #include "backend/io/atomic_file.h"
@@ -56,6 +57,15 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
   const FrontEndInputs in = PrepareFrontEnd(d, o, out);
   return Localize(d, in.words, in.model, o.localization);
+}
+
+plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt) {
+  plot::Series walls{std::move(label), {}, {}, plot::SeriesStyle::kSegments, color, width_pt};
+  for (const auto& w : d.meta.walls) {
+    walls.x.insert(walls.x.end(), {w[0], w[2]});
+    walls.y.insert(walls.y.end(), {w[1], w[3]});
+  }
+  return walls;
 }
 
 // The CAT-Graph+ paper's Figs. 7 and 8: the best hypothesis of every frame,

@@ -54,6 +54,10 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
 // PrepareFrontEnd, then CAT-Graph (and CAT-Graph+) over the dataset.
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
 
+// The dataset's floor plan (meta.json's walls) as one segments series; no
+// points when it has none.
+plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt);
+
 // The CAT-Graph+ paper's Figs. 7, 8 and 11: the hypothesis per frame, and
 // the error of every closure per frame.
 plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold);

@@ -37,7 +37,7 @@ struct MapCommandOptions {
   std::string hierarchy = "cascade";
   PoseGraphOptimizerOptions optimizer;
   FalseMatchOptions injection;  // its seed is the filter's
-  int feedback_reruns = 3;      // MapWithFeedback's max_reruns
+  int feedback_reruns = kDefaultFeedbackReruns;
 };
 
 // `estimate` moved so that its first pose is the truth's first pose, for
@@ -65,11 +65,7 @@ plot::Series Path(const std::string& label, const Trajectory2& poses, plot::Colo
 // first true pose, over the floor plan when the dataset has one.
 plot::Figure MapFigure(const Dataset& d, const PoseGraph2& front, const PoseGraph2& corrected,
                        const std::vector<ClosureDecision>& decisions, const Trajectory2& truth) {
-  plot::Series walls{"", {}, {}, plot::SeriesStyle::kSegments, {0.55, 0.55, 0.55, 1.0}, 0.6};
-  for (const auto& w : d.meta.walls) {
-    walls.x.insert(walls.x.end(), {w[0], w[2]});
-    walls.y.insert(walls.y.end(), {w[1], w[3]});
-  }
+  const plot::Series walls = WallsSeries(d, "", {0.55, 0.55, 0.55, 1.0}, 0.6);
   plot::Series truth_path = Path("ground truth", truth, {0.2, 0.6, 0.2, 0.6}, 0.8);
   auto panel = [&](const std::string& title, const Trajectory2& poses, bool closures) {
     plot::Axes axes;

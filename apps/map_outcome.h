@@ -73,6 +73,8 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
 // no further visual closure, or after `max_reruns` re-runs. Policy flat (the
 // comparison without a hierarchy) and a front end without CAT-Graph+ are
 // solved once.
+// catgraph map's default max_reruns.
+inline constexpr int kDefaultFeedbackReruns = 3;
 struct FedBackMap {
   LocalizationResult front;  // the last front-end run
   MapOutcome outcome;        // its solve

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
+#include "apps/localization_report.h"
 #include "apps/plot/figure.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
@@ -47,11 +48,7 @@ plot::Figure PlanFigure(const Dataset& d, const std::string& title) {
     AddPolygon(s, r.polygon);
     axes.series.push_back(std::move(s));
   }
-  plot::Series walls{"walls", {}, {}, plot::SeriesStyle::kSegments, {0.1, 0.1, 0.1, 1.0}, 1.0};
-  for (const auto& w : d.meta.walls) {
-    walls.x.insert(walls.x.end(), {w[0], w[2]});
-    walls.y.insert(walls.y.end(), {w[1], w[3]});
-  }
+  plot::Series walls = WallsSeries(d, "walls", {0.1, 0.1, 0.1, 1.0}, 1.0);
   if (!walls.x.empty()) axes.series.push_back(std::move(walls));
   const std::vector<int> traversals = d.Traversals();
   plot::Series everywhere{"furniture (every traversal)", {}, {}, plot::SeriesStyle::kSegments, {0.45, 0.45, 0.45, 1.0}, 1.2};

@@ -132,11 +132,6 @@ class SwitchableRelativePoseCost {
       : measurement_(measurement), sqrt_information_(sqrt_information), function_(function) {}
 
   template <typename T>
-  static T Psi(const T& s, SwitchFunction function) {
-    return function == SwitchFunction::kLinear ? s : T(1.0) / (T(1.0) + ceres::exp(-s));
-  }
-
-  template <typename T>
   bool operator()(const T* pose_i, const T* pose_j, const T* s, T* residuals) const {
     Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
     r = Psi(s[0], function_) * (sqrt_information_.template cast<T>() *
@@ -179,7 +174,7 @@ class CoupledSwitchableRelativePoseCost {
   bool operator()(T const* const* parameters, T* residuals) const {
     T scale(1.0);
     for (int k = 0; k < num_switches_; ++k) {
-      scale *= SwitchableRelativePoseCost<PoseT>::Psi(parameters[2 + k][0], function_);
+      scale *= Psi(parameters[2 + k][0], function_);
     }
     Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
     r = scale * (sqrt_information_.template cast<T>() *

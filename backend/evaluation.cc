@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -10,8 +11,16 @@
 
 #include <Eigen/Geometry>
 
+#include "backend/graph/relative_pose_error.h"
+
 namespace catgraph {
 namespace {
+
+// A closure's endpoints, smaller id first: closures are matched either way.
+using EndpointPair = std::pair<std::int64_t, std::int64_t>;
+EndpointPair EndpointsOf(PoseId a, PoseId b) {
+  return a.value() <= b.value() ? EndpointPair(a.value(), b.value()) : EndpointPair(b.value(), a.value());
+}
 
 Eigen::Vector2d Position(const Pose2& p) { return {p.x(), p.y()}; }
 const Eigen::Vector3d& Position(const Pose3& p) { return p.translation(); }
@@ -133,23 +142,25 @@ std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
 }
 
 ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
-                            const std::vector<ClosureLabel>& labels) {
-  using Pair = std::pair<std::int64_t, std::int64_t>;
-  auto key = [](PoseId a, PoseId b) {
-    return a.value() <= b.value() ? Pair(a.value(), b.value()) : Pair(b.value(), a.value());
-  };
-  std::map<Pair, std::deque<bool>> by_pair;
-  for (const ClosureOutcome& o : outcomes) by_pair[key(o.from, o.to)].push_back(o.accepted);
+                            const std::vector<ClosureLabel>& labels, double truth_gate) {
+  std::map<EndpointPair, std::deque<const ClosureOutcome*>> by_pair;
+  for (const ClosureOutcome& o : outcomes) by_pair[EndpointsOf(o.from, o.to)].push_back(&o);
   ClosureScores s;
   for (const ClosureLabel& label : labels) {
     bool accepted = false;
-    auto it = by_pair.find(key(label.from, label.to));
+    double chi2_at_truth = std::numeric_limits<double>::quiet_NaN();
+    auto it = by_pair.find(EndpointsOf(label.from, label.to));
     if (it != by_pair.end() && !it->second.empty()) {
-      accepted = it->second.front();
+      accepted = it->second.front()->accepted;
+      chi2_at_truth = it->second.front()->chi2_at_truth;
       it->second.pop_front();
     }
     if (label.outlier) {
       ++(accepted ? s.false_positives : s.true_negatives);
+      if (chi2_at_truth <= truth_gate) {
+        ++s.outliers_explained_by_truth;
+        s.explained_outliers_accepted += accepted ? 1 : 0;
+      }
     } else {
       ++(accepted ? s.true_positives : s.false_negatives);
     }
@@ -163,7 +174,43 @@ ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
   }
   s.f1 = s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall)
                                       : 0.0;
+  const std::size_t outliers = s.true_negatives + s.false_positives;
+  if (outliers > 0) {
+    s.outlier_rejection = static_cast<double>(s.true_negatives) / static_cast<double>(outliers);
+  }
+  const std::size_t unexplained = outliers - s.outliers_explained_by_truth;
+  if (unexplained > 0) {
+    const std::size_t unexplained_accepted = s.false_positives - s.explained_outliers_accepted;
+    s.unexplained_outlier_rejection =
+        static_cast<double>(unexplained - unexplained_accepted) / static_cast<double>(unexplained);
+  }
   return s;
+}
+
+void AttachChi2AtTruth(std::vector<ClosureOutcome>& outcomes, const AnyPoseGraph& graph,
+                       const AnyTrajectory& truth) {
+  std::visit(
+      [&](const auto& g) {
+        using PoseT = typename std::decay_t<decltype(g)>::Pose;
+        const Trajectory<PoseT> gt =
+            std::visit([](const auto& t) { return ConvertTrajectory<PoseT>(t); }, truth);
+        std::map<EndpointPair, std::deque<double>> by_pair;
+        for (const auto& c : g.constraints) {
+          if (c.IsBetweenConsecutivePoses()) continue;
+          const auto from = gt.find(c.from), to = gt.find(c.to);
+          by_pair[EndpointsOf(c.from, c.to)].push_back(
+              from == gt.end() || to == gt.end()
+                  ? std::numeric_limits<double>::quiet_NaN()
+                  : RelativePoseChi2(from->second, to->second, c.measurement));
+        }
+        for (ClosureOutcome& o : outcomes) {
+          auto it = by_pair.find(EndpointsOf(o.from, o.to));
+          if (it == by_pair.end() || it->second.empty()) continue;
+          o.chi2_at_truth = it->second.front();
+          it->second.pop_front();
+        }
+      },
+      graph);
 }
 
 }  // namespace catgraph

@@ -6,6 +6,7 @@
 #define CATGRAPH_BACKEND_EVALUATION_H_
 
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "backend/graph/closure_label.h"
@@ -53,6 +54,8 @@ TrajectoryEvaluation EvaluateTrajectory(const AnyTrajectory& estimate, const Any
 struct ClosureOutcome {
   PoseId from, to;
   bool accepted = true;
+  // The closure's chi2 at the true poses (AttachChi2AtTruth); NaN unknown.
+  double chi2_at_truth = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The loop closures of an optimised graph: accepted unless switched off
@@ -69,6 +72,17 @@ struct ClosureScores {
   // TP / (TP + FN); 1 when there is no inlier.
   double recall = 1.0;
   double f1 = 1.0;  // harmonic mean of precision and recall; 0 when both are 0
+  // Labelled false, yet explained by the ground truth: chi2 at the true
+  // poses within the truth gate. Vertigo's protocol draws a false
+  // measurement near the identity (robust-backend-notes.md §2), so a
+  // "local" pair whose poses really lie that close is false by its label
+  // only. Zero without chi2_at_truth.
+  std::size_t outliers_explained_by_truth = 0;
+  std::size_t explained_outliers_accepted = 0;
+  // Share of the outliers rejected: TN / (TN + FP), and the same among the
+  // outliers the truth does not explain; 1 when there are none.
+  double outlier_rejection = 1.0;
+  double unexplained_outlier_rejection = 1.0;
 };
 
 // Matches every label to the first unused outcome with the same endpoints
@@ -76,8 +90,19 @@ struct ClosureScores {
 // closure's endpoints is told apart by position, as inject appends it after
 // the original. A label without an outcome counts as rejected (an output
 // written with rejected closures dropped).
+// `truth_gate`: an outlier whose chi2_at_truth is at most this counts as
+// explained by the truth (the optimiser's gate: ChiSquareQuantile(dof,
+// 0.999)).
 ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
-                            const std::vector<ClosureLabel>& labels);
+                            const std::vector<ClosureLabel>& labels, double truth_gate = 0.0);
+
+// Sets each outcome's chi2_at_truth from the loop closure of `graph` with the
+// same endpoints (either direction, matched in order as ScoreClosures does)
+// at the poses of `truth`: the closures' measurements come from the graph,
+// the decisions may come from elsewhere (an optimiser's report). Left NaN
+// where the graph lacks the closure or the truth an endpoint.
+void AttachChi2AtTruth(std::vector<ClosureOutcome>& outcomes, const AnyPoseGraph& graph,
+                       const AnyTrajectory& truth);
 
 }  // namespace catgraph
 

@@ -3,6 +3,7 @@
 #ifndef CATGRAPH_BACKEND_FACTORS_H_
 #define CATGRAPH_BACKEND_FACTORS_H_
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -16,6 +17,13 @@ namespace catgraph {
 // How a switch scales its constraint: Psi(s) = s with s in [0, 1]
 // (Vertigo's default), or the sigmoid 1 / (1 + e^-s) with s unbounded.
 enum class SwitchFunction { kLinear, kSigmoid };
+
+// Psi(s), for T = double and for Ceres' Jets (their exp is found by ADL).
+template <typename T>
+T Psi(const T& s, SwitchFunction function) {
+  using std::exp;
+  return function == SwitchFunction::kLinear ? s : T(1.0) / (T(1.0) + exp(-s));
+}
 
 // A robust loss applied to a factor's squared residual norm.
 struct RobustLoss {

@@ -10,6 +10,7 @@
 
 #include "backend/chi_square.h"
 #include "backend/graph/name_table.h"
+#include "backend/graph/relative_pose_error.h"
 #include "backend/initialization.h"
 #include "backend/robust_losses.h"
 
@@ -26,27 +27,8 @@ constexpr NameTable<RobustMethod, 6> kMethodNames = {{
 }};
 
 template <typename PoseT>
-Eigen::Matrix<double, PoseT::kTangentDim, 1> Error(const PoseT& from, const PoseT& to,
-                                                   const PoseT& z);
-template <>
-Eigen::Matrix<double, 3, 1> Error(const Pose2& from, const Pose2& to, const Pose2& z) {
-  return z.Between(from.Between(to)).ToVector();
-}
-template <>
-Eigen::Matrix<double, 6, 1> Error(const Pose3& from, const Pose3& to, const Pose3& z) {
-  const Pose3 d = z.Between(from.Between(to));
-  Eigen::Quaterniond q = d.rotation();
-  if (q.w() < 0.0) q.coeffs() = -q.coeffs();
-  Eigen::Matrix<double, 6, 1> e;
-  e << d.translation(), q.vec();
-  return e;
-}
-
-template <typename PoseT>
 double EdgeChi2(const PoseGraph<PoseT>& graph, const Constraint<PoseT>& c) {
-  const auto e = Error(*graph.vertices.at(c.from).pose, *graph.vertices.at(c.to).pose,
-                       c.measurement.mean);
-  return e.dot(c.measurement.information * e);
+  return RelativePoseChi2(*graph.vertices.at(c.from).pose, *graph.vertices.at(c.to).pose, c.measurement);
 }
 
 template <typename PoseT>
@@ -275,9 +257,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     switch_of_closure(child);
     for (const ClosureId other : others) coupled_switches[child].push_back(switch_of_closure(other));
   }
-  auto psi = [&options](double s) {
-    return options.switch_function == SwitchFunction::kLinear ? s : 1.0 / (1.0 + std::exp(-s));
-  };
+  auto psi = [&options](double s) { return Psi(s, options.switch_function); };
 
   // The poses and the gauge, shared by the robust solve and the refinement.
   auto add_poses = [&graph](FactorGraph& factors, Values& values,

@@ -167,6 +167,9 @@ TEST_CASE("inject, optimize, evaluate: the experiment in three commands", "[apps
   CHECK(j.at("recall").get<double>() > 0.99);
   CHECK(j.at("false_positives") == 0);
   CHECK(j.at("true_negatives") == 30);
+  CHECK(j.at("outlier_rejection") == 1.0);
+  CHECK(j.at("outliers_explained_by_truth") == 0);
+  CHECK(j.at("unexplained_outlier_rejection") == 1.0);
   // The simulated noise is small: the corrected map is within centimetres.
   CHECK(j.at("ate_rmse").get<double>() < 0.2);
   CHECK(j.at("rmse_anchored").get<double>() >= j.at("ate_rmse").get<double>());
@@ -177,6 +180,7 @@ TEST_CASE("inject, optimize, evaluate: the experiment in three commands", "[apps
   const auto k = nlohmann::json::parse(
       Run({"evaluate", plain, "--truth", truth, "--labels", labels, "--report", report, "--json"}).out);
   CHECK(k.at("false_positives") == 30);
+  CHECK(k.at("outlier_rejection") == 0.0);
   CHECK(k.at("ate_rmse").get<double>() > j.at("ate_rmse").get<double>());
   std::filesystem::remove_all(dir);
 }
@@ -477,6 +481,27 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   CHECK(accepted > 0);
   CHECK(accepted_changed <= 0.1 * changed_queries);
   CHECK(std::filesystem::exists(root / "sad" / "sad.png"));
+
+  // The Table III sweep, one cell at the defaults, with the back end in the
+  // loop: each cell is mapped as catgraph map does, so its front end's last
+  // run is the map's (the same inferences, the same re-runs).
+  const Result sweep = Run({"inference-sweep", data.string(), "-o", (root / "sweep").string(), "--d-tot", "1",
+                            "--d-loc", "2", "--back-end", "--quiet"});
+  INFO(sweep.out << sweep.err);
+  REQUIRE(sweep.status == 0);
+  std::ifstream sweep_csv(root / "sweep" / "sweep.csv");
+  std::getline(sweep_csv, line);
+  CHECK(line == "d_tot_m,d_loc_m,inferred,false,largest_error_m,mean_false_error_m,mean_error_m,discarded,"
+                "false_accepted,reruns");
+  std::getline(sweep_csv, line);
+  std::vector<std::string> cell;
+  std::stringstream cell_in(line);
+  for (std::string x; std::getline(cell_in, x, ',');) cell.push_back(x);
+  REQUIRE(cell.size() == 10);
+  CHECK(std::stoi(cell[2]) == report.at("closures_by_kind").at("inferred").at("count").get<int>());
+  CHECK(cell[3] == "0");
+  CHECK(cell[8] == "0");
+  CHECK(std::stoi(cell[9]) == report.at("feedback").at("reruns").get<int>());
 
   // Issue #8: false visual matches at the source. The flagged closures and
   // their children in report.json ...

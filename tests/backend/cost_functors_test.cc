@@ -13,6 +13,7 @@
 
 #include "backend/cost_functors.h"
 #include "backend/factors.h"
+#include "backend/graph/relative_pose_error.h"
 #include "tests/test_support.h"
 
 namespace catgraph {
@@ -80,6 +81,23 @@ TEST_CASE("3D relative-pose functor: Jacobians on the quaternion manifold match"
   }
 }
 
+TEST_CASE("the functors' error is the graph layer's RelativePoseError, 2D and 3D",
+          "[backend][functor]") {
+  std::mt19937_64 rng(23);
+  for (int trial = 0; trial < 20; ++trial) {
+    CAPTURE(trial);
+    // Any poses, the heading error across the +-pi cut included.
+    const Pose2 xi = RandomPose2(rng), xj = RandomPose2(rng), z = RandomPose2(rng);
+    const auto bi = Block(xi), bj = Block(xj);
+    const Eigen::Vector3d e2 = RelativePose2Error(bi.data(), bj.data(), z);
+    CHECK((e2 - RelativePoseError(xi, xj, z)).norm() < 1e-12);
+    const Pose3 pi = RandomPose3(rng), pj = RandomPose3(rng), w = RandomPose3(rng);
+    const auto ci = Block(pi), cj = Block(pj);
+    const Eigen::Matrix<double, 6, 1> e3 = RelativePose3Error(ci.data(), cj.data(), w);
+    CHECK((e3 - RelativePoseError(pi, pj, w)).norm() < 1e-12);
+  }
+}
+
 TEST_CASE("switchable functors: Jacobians including d/ds match, linear and sigmoid",
           "[backend][functor]") {
   std::mt19937_64 rng(23);
@@ -116,9 +134,9 @@ TEST_CASE("coupled switchable functor: Jacobians match, residual is the product 
   for (SwitchFunction f : {SwitchFunction::kLinear, SwitchFunction::kSigmoid}) {
     for (int trial = 0; trial < 5; ++trial) {
       std::array<double, 3> s = {unit(rng), unit(rng), unit(rng)};  // own, two parents
-      const double product = SwitchableRelativePoseCost<Pose2>::Psi(s[0], f) *
-                             SwitchableRelativePoseCost<Pose2>::Psi(s[1], f) *
-                             SwitchableRelativePoseCost<Pose2>::Psi(s[2], f);
+      const double product = Psi(s[0], f) *
+                             Psi(s[1], f) *
+                             Psi(s[2], f);
       {
         const Pose2 xi = RandomPose2(rng), z = RandomPose2(rng);
         const Pose2 xj = xi * z * Pose2(-0.2, 0.5, -0.3);

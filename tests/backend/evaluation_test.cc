@@ -133,6 +133,59 @@ TEST_CASE("closure scores count matches by endpoints, in order, absent ones reje
   CHECK(none.f1 == 0.0);
 }
 
+TEST_CASE("an outlier the ground truth explains is told apart from one it contradicts",
+          "[evaluation]") {
+  // Truth: a 2 m square of poses 0..3. Closures 0-2 and 1-3 are labelled
+  // false; 0-2's measurement is the true relative pose (chi2 0 at the
+  // truth), 1-3's is 1 m off (chi2 = 1 * 100 with information 100).
+  Trajectory2 truth = {{PoseId(0), Pose2(0, 0, 0)},
+                       {PoseId(1), Pose2(2, 0, std::numbers::pi / 2)},
+                       {PoseId(2), Pose2(2, 2, std::numbers::pi)},
+                       {PoseId(3), Pose2(0, 2, -std::numbers::pi / 2)}};
+  PoseGraph2 graph;
+  for (const auto& [id, pose] : truth) graph.vertices[id] = {id, pose, false};
+  auto closure = [&](std::int64_t from, std::int64_t to, const Pose2& z) {
+    Constraint<Pose2> c;
+    c.id = ClosureId(static_cast<std::int64_t>(graph.constraints.size()));
+    c.from = PoseId(from);
+    c.to = PoseId(to);
+    c.measurement.mean = z;
+    c.measurement.information = 100.0 * Eigen::Matrix3d::Identity();
+    graph.constraints.push_back(c);
+  };
+  closure(0, 2, truth[PoseId(0)].Between(truth[PoseId(2)]));
+  const Pose2 true_13 = truth[PoseId(1)].Between(truth[PoseId(3)]);
+  closure(1, 3, Pose2(true_13.x() + 1.0, true_13.y(), true_13.theta()));
+  auto label = [](std::int64_t from, std::int64_t to) {
+    ClosureLabel l;
+    l.from = PoseId(from);
+    l.to = PoseId(to);
+    l.outlier = true;
+    return l;
+  };
+  const std::vector<ClosureLabel> labels = {label(0, 2), label(1, 3)};
+  for (const bool second_accepted : {false, true}) {
+    CAPTURE(second_accepted);
+    std::vector<ClosureOutcome> outcomes = {{PoseId(2), PoseId(0), true},
+                                            {PoseId(1), PoseId(3), second_accepted}};
+    AttachChi2AtTruth(outcomes, AnyPoseGraph(graph), AnyTrajectory(truth));
+    CHECK(outcomes[0].chi2_at_truth == Approx(0.0).margin(1e-18));
+    CHECK(outcomes[1].chi2_at_truth == Approx(100.0));
+    const ClosureScores s = ScoreClosures(outcomes, labels, 16.27);
+    CHECK(s.outliers_explained_by_truth == 1);
+    CHECK(s.explained_outliers_accepted == 1);
+    CHECK(s.outlier_rejection == Approx(second_accepted ? 0.0 : 0.5));
+    CHECK(s.unexplained_outlier_rejection == Approx(second_accepted ? 0.0 : 1.0));
+    // Without a truth gate nothing counts as explained.
+    CHECK(ScoreClosures(outcomes, labels).outliers_explained_by_truth == 0);
+  }
+  // A truth without an endpoint leaves the chi2 unknown, and unexplained.
+  truth.erase(PoseId(3));
+  std::vector<ClosureOutcome> outcomes = {{PoseId(1), PoseId(3), false}};
+  AttachChi2AtTruth(outcomes, AnyPoseGraph(graph), AnyTrajectory(truth));
+  CHECK(std::isnan(outcomes[0].chi2_at_truth));
+}
+
 TEST_CASE("the outlier-free Manhattan optimum: ATE 0.79 m, anchored RMSE 1.18 m "
           "(robust-backend-notes.md)",
           "[evaluation][shared]") {
