@@ -265,6 +265,12 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-offset", f.new_place_log_offset,
                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
       ->capture_default_str();
+  cmd.add_option_function<std::string>(
+         "--new-place-motion", [&f](const std::string& name) { f.new_place_motion = *NewPlaceMotionFromString(name); },
+         "How new place weighs the odometry against its mean: noise (the filter's Q, the spec) or spread (the "
+         "odometry's own spread: a turn the map does not make takes the robot off it). docs/frontend.md")
+      ->check(CLI::IsMember(NewPlaceMotionNames()))
+      ->default_str(std::string(ToString(f.new_place_motion)));
   cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
                "Let particles onto nodes that dead reckoning rules out");
   cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();

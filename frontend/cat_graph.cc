@@ -9,9 +9,17 @@
 #include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
+
+#include "backend/graph/name_table.h"
 
 namespace catgraph {
 namespace {
+
+constexpr NameTable<NewPlaceMotion, 2> kNewPlaceMotionNames = {{
+    {NewPlaceMotion::kFilterNoise, "noise"},
+    {NewPlaceMotion::kOdometrySpread, "spread"},
+}};
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
@@ -90,6 +98,22 @@ int CatGraphFilter::EligibleBelow() const {
   });
   return static_cast<int>(first_ineligible - nodes.begin());
 }
+
+double NewPlaceMotionLogLikelihood(const Eigen::Vector3d& u, const Eigen::Vector3d& mean,
+                                   const Eigen::Vector3d& spread, const Eigen::Vector3d& noise_sigma,
+                                   NewPlaceMotion model) {
+  const Eigen::Vector3d sigma =
+      model == NewPlaceMotion::kOdometrySpread ? noise_sigma.cwiseMax(spread) : noise_sigma;
+  return -0.5 * (u - mean).cwiseQuotient(sigma).squaredNorm();
+}
+
+std::string_view ToString(NewPlaceMotion model) { return NameOf(kNewPlaceMotionNames, model); }
+
+std::optional<NewPlaceMotion> NewPlaceMotionFromString(std::string_view text) {
+  return ValueOf(kNewPlaceMotionNames, text);
+}
+
+std::vector<std::string> NewPlaceMotionNames() { return NamesOf(kNewPlaceMotionNames); }
 
 double OdometricGateRadius(const CatGraphOptions& options, double path_since_m) {
   if (!options.odometric_gate) return std::numeric_limits<double>::infinity();
@@ -351,10 +375,13 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
   if (!restart) {
-    u_sum_ += u.ToVector();
+    // Welford's running mean and spread of the odometry.
     ++u_count_;
-    const Eigen::Vector3d du = (u.ToVector() - u_sum_ / u_count_).cwiseQuotient(options_.motion_sigma);
-    log_new -= 0.5 * du.squaredNorm();
+    const Eigen::Vector3d delta = u.ToVector() - u_mean_;
+    u_mean_ += delta / u_count_;
+    u_m2_ += delta.cwiseProduct(u.ToVector() - u_mean_);
+    log_new += NewPlaceMotionLogLikelihood(u.ToVector(), u_mean_, (u_m2_ / u_count_).cwiseSqrt(),
+                                           options_.motion_sigma, options_.new_place_motion);
   }
   double log_total = log_new;
   for (const Particle& p : particles_) log_total = LogSumExp(log_total, p.log_weight);

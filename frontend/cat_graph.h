@@ -33,6 +33,8 @@
 #include <functional>
 #include <optional>
 #include <random>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,6 +44,28 @@
 #include "frontend/trajectory_graph.h"
 
 namespace catgraph {
+
+// How new place (Eq 6) weighs a frame's odometry u_k against the mean
+// odometry [R, spec §6.3; docs/frontend.md "New place and the odometry"].
+enum class NewPlaceMotion {
+  // Σ_u = Q, the spec's reading: a turn costs new place as much as it costs
+  // a particle on a straight edge, so a turn the map does not make never
+  // takes the robot off the map.
+  kFilterNoise,
+  // Σ_u = the odometry's own spread so far, per component and at least Q: a
+  // new place may turn as the robot does anywhere.
+  kOdometrySpread,
+};
+
+// log p(u | u_avg) of Eq 6 up to a constant: -1/2 sum(((u - mean) / sigma)^2)
+// with sigma = noise_sigma (Q's), or per component the larger of noise_sigma
+// and `spread` (the odometry's standard deviation) for kOdometrySpread.
+double NewPlaceMotionLogLikelihood(const Eigen::Vector3d& u, const Eigen::Vector3d& mean,
+                                   const Eigen::Vector3d& spread, const Eigen::Vector3d& noise_sigma,
+                                   NewPlaceMotion model);
+std::string_view ToString(NewPlaceMotion model);
+std::optional<NewPlaceMotion> NewPlaceMotionFromString(std::string_view text);  // "noise", "spread"
+std::vector<std::string> NewPlaceMotionNames();
 
 // The CAT-Graph+ paper's Table I as defaults.
 struct CatGraphOptions {
@@ -63,6 +87,7 @@ struct CatGraphOptions {
   // corridor, which share its far view. Nats; chosen for 500-word SIFT
   // vocabularies (docs/frontend.md); 0 is the spec as written.
   double new_place_log_offset = 45.0;
+  NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   double exclusion_window_s = 10.0;        // nodes younger than this ...
   double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible
   // Odometric gate [D, docs/frontend.md]: a node is not eligible while dead
@@ -212,8 +237,9 @@ class CatGraphFilter {
   std::vector<Particle> particles_;
   std::mt19937_64 rng_;
   double time_s_ = 0.0, path_length_m_ = 0.0;
-  Eigen::Vector3d u_sum_ = Eigen::Vector3d::Zero();
   int u_count_ = 0;
+  Eigen::Vector3d u_mean_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d u_m2_ = Eigen::Vector3d::Zero();  // sum of squared deviations
   int eligible_below_ = 0;                 // this step's EligibleBelow()
   Pose2 odometry_pose_;                    // dead reckoning of the current frame
   std::function<bool(int)> eligible_;      // Eligible() for the builder

@@ -385,6 +385,27 @@ TEST_CASE("The odometric gate keeps a first pass through an aliased corridor fre
   }
 }
 
+TEST_CASE("Eq 6's odometry term: Q's sigma, or the odometry's own spread where it is wider", "[frontend][catgraph]") {
+  const Eigen::Vector3d q(0.05, 0.05, 0.005), mean(0.05, 0.0, 0.01), spread(0.01, 0.002, 0.04);
+  // A 90-degree turn over 15 frames: 0.105 rad in a frame, 0.095 over the mean.
+  const Eigen::Vector3d turn(0.05, 0.0, 0.01 + 0.095);
+  // (0.095 / 0.005)^2 / 2 = 180.5 nats under Q alone ...
+  CHECK(NewPlaceMotionLogLikelihood(turn, mean, spread, q, NewPlaceMotion::kFilterNoise) == Approx(-180.5));
+  // ... and (0.095 / 0.04)^2 / 2 = 2.82 nats where the odometry turns that much.
+  CHECK(NewPlaceMotionLogLikelihood(turn, mean, spread, q, NewPlaceMotion::kOdometrySpread) ==
+        Approx(-0.5 * std::pow(0.095 / 0.04, 2)));
+  // Where the spread is narrower than Q, Q holds: x and y are weighed as before.
+  const Eigen::Vector3d faster(0.15, 0.1, 0.01);
+  const double expected = -0.5 * (std::pow(0.1 / 0.05, 2) + std::pow(0.1 / 0.05, 2));
+  CHECK(NewPlaceMotionLogLikelihood(faster, mean, spread, q, NewPlaceMotion::kOdometrySpread) == Approx(expected));
+  CHECK(NewPlaceMotionLogLikelihood(faster, mean, spread, q, NewPlaceMotion::kFilterNoise) == Approx(expected));
+  CHECK(NewPlaceMotionLogLikelihood(mean, mean, spread, q, NewPlaceMotion::kOdometrySpread) == 0.0);
+  for (const auto model : {NewPlaceMotion::kFilterNoise, NewPlaceMotion::kOdometrySpread}) {
+    CHECK(NewPlaceMotionFromString(ToString(model)) == model);
+  }
+  CHECK_FALSE(NewPlaceMotionFromString("bogus").has_value());
+}
+
 TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") {
   CatGraphOptions o;
   o.closure_threshold = 0.0;
