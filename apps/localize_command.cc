@@ -80,7 +80,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
       if (o.back_end) {
         mapped = MapWithFeedback(d, words, model, options, std::move(r), optimizer, hierarchy, truth,
                                  kDefaultFeedbackReruns);
-        r = mapped->front;
+        r = std::move(mapped->front);
       }
       int inferred = 0, wrong = 0;
       double largest = 0.0, sum_false = 0.0, sum = 0.0;
