@@ -6,7 +6,8 @@
 #
 # SECONDS per target (default 60; 0 for no time limit); FUZZ_RUNS, when set,
 # stops each target after that many executions instead (the long documented
-# runs: FUZZ_RUNS=10000000 bash scripts/fuzz.sh 0). TARGETs among graph trajectory scenario
+# runs: FUZZ_RUNS=10000000 bash scripts/fuzz.sh 0), made of processes of at
+# most FUZZ_CHUNK executions (default 500000). TARGETs among graph trajectory scenario
 # dataset sweep vocabulary (default all). The seed corpus is made from the
 # project's own test fixtures, scenarios, sweep configurations and files the
 # release build (build/apps/catgraph, when present) generates; each run grows
@@ -97,16 +98,31 @@ max_len_of() {
     sweep|vocabulary) echo "-max_len=8192" ;;
   esac
 }
+# One libFuzzer process for `seconds` (or FUZZ_RUNS executions); with
+# FUZZ_RUNS, a chain of processes of at most FUZZ_CHUNK executions each
+# (default 500000), every one starting from the corpus the last one grew: the
+# sanitizer runtime's own memory grows by 2-8 KB per execution on the
+# yaml-cpp targets (a release build of the same readers stays flat), and one
+# process of 10^7 executions would pass the 2 GB limit.
 run() {
-  local t="$1" scratch rc=0
+  local t="$1" scratch rc=0 remaining="${FUZZ_RUNS:--1}" chunk="${FUZZ_CHUNK:-500000}" runs done_now
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
-  scratch="$(mktemp -d "$scratch_root/catgraph-fuzz-$t.XXXXXX")"
-  # shellcheck disable=SC2046
-  TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="${FUZZ_RUNS:--1}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-    -seed="${FUZZ_SEED:-0}" \
-    -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") $(max_len_of "$t") "$build_dir/corpus/$t" \
-    >"$build_dir/$t.log" 2>&1 || rc=$?
-  rm -rf "$scratch"
+  : >"$build_dir/$t.log"
+  while :; do
+    runs="$remaining"
+    if [ "$remaining" -gt 0 ] && [ "$remaining" -gt "$chunk" ]; then runs="$chunk"; fi
+    scratch="$(mktemp -d "$scratch_root/catgraph-fuzz-$t.XXXXXX")"
+    # shellcheck disable=SC2046
+    TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="$runs" -timeout=10 -rss_limit_mb=2048 \
+      -print_final_stats=1 -seed="${FUZZ_SEED:-0}" \
+      -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") $(max_len_of "$t") "$build_dir/corpus/$t" \
+      >>"$build_dir/$t.log" 2>&1 || rc=$?
+    rm -rf "$scratch"
+    [ "$rc" -eq 0 ] && [ "$remaining" -gt 0 ] || break
+    done_now=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | tail -1 | grep -o '[0-9]*$')
+    remaining=$((remaining - done_now))
+    [ "$remaining" -gt 0 ] || break
+  done
   return "$rc"
 }
 status=0
@@ -122,8 +138,9 @@ done
 for p in "${pids[@]}"; do wait "$p" || status=1; done
 printf '%-12s %14s %10s %s\n' target executions exec/s result
 for t in "${targets[@]}"; do
-  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | grep -o '[0-9]*$' || echo 0)
-  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$build_dir/$t.log" | grep -o '[0-9]*$' || echo 0)
+  # Sums over the chain of processes; the rate is their mean.
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | awk '{s += $2} END {print s + 0}')
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$build_dir/$t.log" | awk '{s += $2; n++} END {print n ? int(s / n) : 0}')
   if grep -qE 'ERROR: (libFuzzer|AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer)|runtime error:|Test unit written' "$build_dir/$t.log"; then
     result="FINDING: $build_dir/$t.log"
     status=1
