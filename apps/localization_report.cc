@@ -1,5 +1,6 @@
 #include "apps/localization_report.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -57,6 +58,12 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
   const FrontEndInputs in = PrepareFrontEnd(d, o, out);
   return Localize(d, in.words, in.model, o.localization);
+}
+
+std::size_t TotalPathDiscards(const LocalizationResult& r) {
+  return static_cast<std::size_t>(
+      std::count_if(r.discarded_inferences.begin(), r.discarded_inferences.end(),
+                    [](const DiscardedInference& x) { return x.reason == DiscardedInference::Reason::kTotalPath; }));
 }
 
 plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt) {
@@ -169,6 +176,7 @@ void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const
                              {"reference_closure", x.reference_closure},
                              {"validating_closure", x.validating_closure}};
     j["error_m"] = std::isnan(x.error_m) ? nlohmann::ordered_json() : nlohmann::ordered_json(x.error_m);
+    j["reason"] = ToString(x.reason);
     discarded.push_back(j);
   }
   WriteFileAtomically(dir / "discarded_inferences.json", [&](std::ostream& f) { f << discarded.dump(1) << '\n'; });
@@ -203,7 +211,13 @@ void PrintLocalizationSummary(const Dataset& d, const LocalizationResult& r, boo
     out << '\n';
   }
   if (odometric_inference) {
-    out << r.discarded_inferences.size() << " inferences discarded by total-path validation\n";
+    const auto by_total_path = TotalPathDiscards(r);
+    out << by_total_path << " inferences discarded by total-path validation";
+    if (r.discarded_inferences.size() > by_total_path) {
+      out << ", " << r.discarded_inferences.size() - by_total_path
+          << " dropped before a visual closure could validate them";
+    }
+    out << '\n';
   }
   // Per traversal: how many frames closed, inside and outside the regions
   // that changed (when the dataset flags them).

@@ -52,7 +52,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
   const Trajectory2 truth = TruthAtFrames(d);
   std::ostringstream csv, table, accepted_table;
   csv << "d_tot_m,d_loc_m,inferred,false,largest_error_m,mean_false_error_m,mean_error_m,discarded,false_accepted,"
-         "reruns\n";
+         "reruns,dropped\n";
   auto header = [&o](std::ostringstream& t) {
     t << "| d_tot \\ d_loc |";
     for (const double l : o.d_loc) t << ' ' << Number(l, "%.1f") << " |";
@@ -93,7 +93,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
       }
       const double mean_false = wrong > 0 ? sum_false / wrong : 0.0, mean = inferred > 0 ? sum / inferred : 0.0;
       csv << t << ',' << l << ',' << inferred << ',' << wrong << ',' << Number(largest) << ',' << Number(mean_false)
-          << ',' << Number(mean) << ',' << r.discarded_inferences.size() << ',';
+          << ',' << Number(mean) << ',' << TotalPathDiscards(r) << ',';
       if (mapped) {
         const std::vector<double>& kept = mapped->outcome.by_kind.at(ClosureKind::kOdometryInferred).accepted_errors;
         const auto false_accepted =
@@ -103,7 +103,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
       } else {
         csv << ',';
       }
-      csv << '\n';
+      csv << ',' << r.discarded_inferences.size() - TotalPathDiscards(r) << '\n';
       table << ' ' << (wrong == 0 ? std::string("0") : std::to_string(wrong) + " / " + Number(largest, "%.2f") +
                                                           " / " + Number(mean_false, "%.2f") + " / " + Number(mean, "%.2f"))
             << " |";

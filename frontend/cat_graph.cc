@@ -312,10 +312,15 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // the previous frame says nothing about where the particles went: they are
   // seeded afresh and the motion terms are left out for this frame.
   const bool restart = first || time_s - time_s_ > options_.sequence_break_s;
+  // Pending inferences a restart drops, reported with this step.
+  std::vector<InferredClosure> lost;
+  int lost_reference = -1;
   if (restart && !first) {
     particles_.clear();
     odometric_.clear();  // CAT-Graph+ waits for the next visual closure
+    lost_reference = reference_node_;
     reference_node_ = -1;
+    lost = std::move(pending_);
     pending_.clear();
   }
   time_s_ = time_s;
@@ -327,6 +332,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
                                 ", which is not older than the exclusion windows");
   }
   CatGraphStep step;
+  if (!lost.empty()) {
+    step.reference_node = lost_reference;
+    step.lost = std::move(lost);
+    step.lost_reason = InferenceLoss::kSequenceBreak;
+  }
   const FrameLikelihood likelihood = model_.ForFrame(words);
 
   if (particles_.empty()) {
@@ -491,6 +501,11 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
   for (const Particle& p : odometric_) log_total = LogSumExp(log_total, p.log_weight);
   if (log_total == kNegInf) {  // every particle left the graph: nothing to infer until the next closure
     odometric_.clear();
+    if (!pending_.empty()) {
+      step.reference_node = reference_node_;
+      step.lost = std::move(pending_);
+      step.lost_reason = InferenceLoss::kFilterLost;
+    }
     reference_node_ = -1;
     pending_.clear();
     return;

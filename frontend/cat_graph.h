@@ -138,6 +138,12 @@ struct LocationHypothesis {
   double value = 0.0;    // Eq 4: weight within d_h
 };
 
+// Why CAT-Graph+ dropped pending inferences between visual closures.
+enum class InferenceLoss {
+  kFilterLost,     // every odometric particle left the graph (or the odometric gate)
+  kSequenceBreak,  // a gap in the frames restarted the filters (sequence_break_s)
+};
+
 // An odometry-inferred closure (CAT-Graph+): frame node `node` is at
 // `location` on the old trajectory.
 struct InferredClosure {
@@ -193,6 +199,10 @@ struct CatGraphStep {
   int reference_node = -1;
   std::vector<InferredClosure> inferred;
   std::vector<InferredClosure> discarded;
+  // Pending inferences dropped with no visual closure to validate them, and
+  // why; `reference_node` is then the closure they hung from.
+  std::vector<InferredClosure> lost;
+  InferenceLoss lost_reason = InferenceLoss::kFilterLost;
 };
 
 class CatGraphFilter {

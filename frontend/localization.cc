@@ -2,16 +2,25 @@
 
 #include <algorithm>
 #include <atomic>
-#include <mutex>
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
-
+#include "backend/graph/name_table.h"
 
 namespace catgraph {
+namespace {
+
+constexpr NameTable<DiscardedInference::Reason, 3> kDiscardReasonNames = {{
+    {DiscardedInference::Reason::kTotalPath, "total_path"},
+    {DiscardedInference::Reason::kFilterLost, "filter_lost"},
+    {DiscardedInference::Reason::kSequenceBreak, "sequence_break"},
+}};
+
+}  // namespace
 
 std::vector<WordSet> ExtractWords(const Dataset& d, const Vocabulary& vocabulary,
                                   const LocalizationOptions& options) {
@@ -180,6 +189,20 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
       }
       visual_closure_of_frame[f.frame] = c.id;
     }
+    if (!step.lost.empty()) {
+      const auto found =
+          visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
+      const int reference = found == visual_closure_of_frame.end() ? -1 : found->second;
+      const auto reason = step.lost_reason == InferenceLoss::kSequenceBreak
+                              ? DiscardedInference::Reason::kSequenceBreak
+                              : DiscardedInference::Reason::kFilterLost;
+      for (const InferredClosure& inferred : step.lost) {
+        const int at = frame_of(inferred.node);
+        result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, -1,
+                                               location_error(static_cast<std::size_t>(at), inferred.location),
+                                               reason});
+      }
+    }
     f.inference_pending = step.inference_pending;
     result.frames.push_back(f);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
@@ -188,5 +211,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   }
   return result;
 }
+
+std::string_view ToString(DiscardedInference::Reason reason) { return NameOf(kDiscardReasonNames, reason); }
 
 }  // namespace catgraph

@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <set>
+#include <string_view>
 #include <vector>
 
 #include "backend/graph/pose_graph.h"
@@ -50,13 +51,19 @@ struct LoopClosure {
   bool vetoed = false;            // visual, at a frame of LocalizationOptions::vetoed_frames
 };
 
-// Inferences that passed local validation but failed total-path validation.
+// Inferences that passed local validation and were not emitted: they failed
+// total-path validation at the next visual closure, or were dropped before
+// one came (InferenceLoss).
 struct DiscardedInference {
+  enum class Reason { kTotalPath, kFilterLost, kSequenceBreak };
   int frame = -1, matched_frame = -1;
   int reference_closure = -1;     // the visual closure they hung from
-  int validating_closure = -1;    // the one whose d_tot check failed
+  int validating_closure = -1;    // the one whose d_tot check failed; -1 for the others
   double error_m = kNoError;
+  Reason reason = Reason::kTotalPath;
 };
+// "total_path", "filter_lost", "sequence_break".
+std::string_view ToString(DiscardedInference::Reason reason);
 
 struct LocalizationResult {
   std::vector<FrameLocalization> frames;

@@ -492,12 +492,12 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   std::ifstream sweep_csv(root / "sweep" / "sweep.csv");
   std::getline(sweep_csv, line);
   CHECK(line == "d_tot_m,d_loc_m,inferred,false,largest_error_m,mean_false_error_m,mean_error_m,discarded,"
-                "false_accepted,reruns");
+                "false_accepted,reruns,dropped");
   std::getline(sweep_csv, line);
   std::vector<std::string> cell;
   std::stringstream cell_in(line);
   for (std::string x; std::getline(cell_in, x, ',');) cell.push_back(x);
-  REQUIRE(cell.size() == 10);
+  REQUIRE(cell.size() == 11);
   CHECK(std::stoi(cell[2]) == report.at("closures_by_kind").at("inferred").at("count").get<int>());
   CHECK(cell[3] == "0");
   CHECK(cell[8] == "0");

@@ -139,7 +139,8 @@ struct ChangedRingRun {
   std::vector<CatGraphStep> steps;
   int per_lap = 0;
 };
-ChangedRingRun RunChangedRing(bool odometric_inference) {
+// `gap_frame` >= 0: the frames from it on come 100 s later (a sequence break).
+ChangedRingRun RunChangedRing(bool odometric_inference, int gap_frame = -1) {
   RingWorld world;
   const std::vector<WordSet> training = world.Lap();
   const int changed_word = RingWorld::Words();  // words beyond the ring's
@@ -158,7 +159,8 @@ ChangedRingRun RunChangedRing(bool odometric_inference) {
     if (k >= run.per_lap && on_ring >= 10.0 && on_ring < 16.0) {
       z = {changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3, changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3 + 1};
     }
-    run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), z));
+    const double t = 0.25 * k + (gap_frame >= 0 && k >= gap_frame ? 100.0 : 0.0);
+    run.steps.push_back(filter.Step(k, t, k == 0 ? Pose2() : RingWorld::Step(), z));
   }
   return run;
 }
@@ -191,6 +193,37 @@ TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, 
   CHECK(visual_in_changed <= 0.1 * changed);
   CHECK(inferred_in_changed >= 0.9 * changed);
   CHECK(worst <= 0.5);
+}
+
+TEST_CASE("Pending inferences a sequence break drops are reported, not lost silently",
+          "[frontend][catgraph][catgraph-plus]") {
+  // The break 3 m into the changed stretch of the second lap (13 m on the
+  // ring), while CAT-Graph+ has inferences pending since the last visual
+  // closure before the stretch.
+  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  const int gap = per_lap + static_cast<int>(13.0 / RingWorld::kStep);
+  const ChangedRingRun run = RunChangedRing(true, gap);
+  REQUIRE(run.steps[static_cast<std::size_t>(gap - 1)].inference_pending);
+  const CatGraphStep& at = run.steps[static_cast<std::size_t>(gap)];
+  REQUIRE_FALSE(at.lost.empty());
+  CHECK(at.lost_reason == InferenceLoss::kSequenceBreak);
+  CHECK(at.reference_node >= 0);
+  // The last visual closure before the break, which they hung from.
+  REQUIRE(at.reference_node < gap);
+  CHECK(run.steps[static_cast<std::size_t>(at.reference_node)].closure);
+  for (int k = at.reference_node + 1; k < gap; ++k) CHECK_FALSE(run.steps[static_cast<std::size_t>(k)].closure);
+  int pending_before = 0;
+  for (int k = at.reference_node + 1; k < gap; ++k) pending_before += run.steps[static_cast<std::size_t>(k)].inference_pending;
+  CHECK(static_cast<int>(at.lost.size()) == pending_before);
+  for (const InferredClosure& c : at.lost) {
+    CHECK(c.node > at.reference_node);
+    CHECK(c.node < gap);
+  }
+  // Nothing else is lost or validated from them: the next visual closure has
+  // no earlier closure to hang inferences from.
+  for (std::size_t k = static_cast<std::size_t>(gap) + 1; k < run.steps.size(); ++k) {
+    CHECK(run.steps[k].lost.empty());
+  }
 }
 
 TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone makes them",
