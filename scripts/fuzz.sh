@@ -7,7 +7,9 @@
 # SECONDS per target (default 60; 0 for no time limit); FUZZ_RUNS, when set,
 # stops each target after that many executions instead (the long documented
 # runs: FUZZ_RUNS=10000000 bash scripts/fuzz.sh 0), made of processes of at
-# most FUZZ_CHUNK executions (default 500000). TARGETs among graph trajectory scenario
+# most FUZZ_CHUNK executions (default 500000). FUZZ_TIMEOUT: seconds of wall
+# time one input may take (default 10; libFuzzer measures wall time, so a
+# campaign at low priority on a busy machine needs more). TARGETs among graph trajectory scenario
 # dataset sweep vocabulary (default all). The seed corpus is made from the
 # project's own test fixtures, scenarios, sweep configurations and files the
 # release build (build/apps/catgraph, when present) generates; each run grows
@@ -113,7 +115,7 @@ run() {
     if [ "$remaining" -gt 0 ] && [ "$remaining" -gt "$chunk" ]; then runs="$chunk"; fi
     scratch="$(mktemp -d "$scratch_root/catgraph-fuzz-$t.XXXXXX")"
     # shellcheck disable=SC2046
-    TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="$runs" -timeout=10 -rss_limit_mb=2048 \
+    TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="$runs" -timeout="${FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 \
       -print_final_stats=1 -seed="${FUZZ_SEED:-0}" \
       -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") $(max_len_of "$t") "$build_dir/corpus/$t" \
       >>"$build_dir/$t.log" 2>&1 || rc=$?
