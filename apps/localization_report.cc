@@ -63,7 +63,7 @@ LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, 
 std::size_t TotalPathDiscards(const LocalizationResult& r) {
   return static_cast<std::size_t>(
       std::count_if(r.discarded_inferences.begin(), r.discarded_inferences.end(),
-                    [](const DiscardedInference& x) { return x.reason == DiscardedInference::Reason::kTotalPath; }));
+                    [](const DiscardedInference& x) { return x.reason == DiscardReason::kTotalPath; }));
 }
 
 plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt) {

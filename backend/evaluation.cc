@@ -5,6 +5,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -16,11 +17,30 @@
 namespace catgraph {
 namespace {
 
-// A closure's endpoints, smaller id first: closures are matched either way.
-using EndpointPair = std::pair<std::int64_t, std::int64_t>;
-EndpointPair EndpointsOf(PoseId a, PoseId b) {
-  return a.value() <= b.value() ? EndpointPair(a.value(), b.value()) : EndpointPair(b.value(), a.value());
-}
+// Values keyed by a closure's endpoints, either direction, handed out in
+// the order they were added: how labels, decisions and measurements of the
+// same closure are matched (a false edge duplicating a true closure's
+// endpoints comes after it).
+template <typename T>
+class ByEndpoints {
+ public:
+  void Add(PoseId a, PoseId b, T value) { queues_[Key(a, b)].push_back(std::move(value)); }
+  // The next value added for these endpoints; nullopt when there is none left.
+  std::optional<T> Take(PoseId a, PoseId b) {
+    const auto it = queues_.find(Key(a, b));
+    if (it == queues_.end() || it->second.empty()) return std::nullopt;
+    T value = std::move(it->second.front());
+    it->second.pop_front();
+    return value;
+  }
+
+ private:
+  using Pair = std::pair<std::int64_t, std::int64_t>;
+  static Pair Key(PoseId a, PoseId b) {
+    return a.value() <= b.value() ? Pair(a.value(), b.value()) : Pair(b.value(), a.value());
+  }
+  std::map<Pair, std::deque<T>> queues_;
+};
 
 Eigen::Vector2d Position(const Pose2& p) { return {p.x(), p.y()}; }
 const Eigen::Vector3d& Position(const Pose3& p) { return p.translation(); }
@@ -143,17 +163,15 @@ std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
 
 ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
                             const std::vector<ClosureLabel>& labels, double truth_gate) {
-  std::map<EndpointPair, std::deque<const ClosureOutcome*>> by_pair;
-  for (const ClosureOutcome& o : outcomes) by_pair[EndpointsOf(o.from, o.to)].push_back(&o);
+  ByEndpoints<const ClosureOutcome*> by_pair;
+  for (const ClosureOutcome& o : outcomes) by_pair.Add(o.from, o.to, &o);
   ClosureScores s;
   for (const ClosureLabel& label : labels) {
     bool accepted = false;
     double chi2_at_truth = std::numeric_limits<double>::quiet_NaN();
-    auto it = by_pair.find(EndpointsOf(label.from, label.to));
-    if (it != by_pair.end() && !it->second.empty()) {
-      accepted = it->second.front()->accepted;
-      chi2_at_truth = it->second.front()->chi2_at_truth;
-      it->second.pop_front();
+    if (const auto o = by_pair.Take(label.from, label.to)) {
+      accepted = (*o)->accepted;
+      chi2_at_truth = (*o)->chi2_at_truth;
     }
     if (label.outlier) {
       ++(accepted ? s.false_positives : s.true_negatives);
@@ -194,20 +212,17 @@ void AttachChi2AtTruth(std::vector<ClosureOutcome>& outcomes, const AnyPoseGraph
         using PoseT = typename std::decay_t<decltype(g)>::Pose;
         const Trajectory<PoseT> gt =
             std::visit([](const auto& t) { return ConvertTrajectory<PoseT>(t); }, truth);
-        std::map<EndpointPair, std::deque<double>> by_pair;
+        ByEndpoints<double> by_pair;
         for (const auto& c : g.constraints) {
           if (c.IsBetweenConsecutivePoses()) continue;
           const auto from = gt.find(c.from), to = gt.find(c.to);
-          by_pair[EndpointsOf(c.from, c.to)].push_back(
-              from == gt.end() || to == gt.end()
-                  ? std::numeric_limits<double>::quiet_NaN()
-                  : RelativePoseChi2(from->second, to->second, c.measurement));
+          by_pair.Add(c.from, c.to,
+                      from == gt.end() || to == gt.end()
+                          ? std::numeric_limits<double>::quiet_NaN()
+                          : RelativePoseChi2(from->second, to->second, c.measurement));
         }
         for (ClosureOutcome& o : outcomes) {
-          auto it = by_pair.find(EndpointsOf(o.from, o.to));
-          if (it == by_pair.end() || it->second.empty()) continue;
-          o.chi2_at_truth = it->second.front();
-          it->second.pop_front();
+          if (const auto chi2 = by_pair.Take(o.from, o.to)) o.chi2_at_truth = *chi2;
         }
       },
       graph);

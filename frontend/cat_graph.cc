@@ -335,7 +335,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   if (!lost.empty()) {
     step.reference_node = lost_reference;
     step.lost = std::move(lost);
-    step.lost_reason = InferenceLoss::kSequenceBreak;
+    step.lost_reason = DiscardReason::kSequenceBreak;
   }
   const FrameLikelihood likelihood = model_.ForFrame(words);
 
@@ -504,7 +504,7 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
     if (!pending_.empty()) {
       step.reference_node = reference_node_;
       step.lost = std::move(pending_);
-      step.lost_reason = InferenceLoss::kFilterLost;
+      step.lost_reason = DiscardReason::kFilterLost;
     }
     reference_node_ = -1;
     pending_.clear();

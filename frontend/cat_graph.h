@@ -138,8 +138,9 @@ struct LocationHypothesis {
   double value = 0.0;    // Eq 4: weight within d_h
 };
 
-// Why CAT-Graph+ dropped pending inferences between visual closures.
-enum class InferenceLoss {
+// Why CAT-Graph+ did not emit a pending inference.
+enum class DiscardReason {
+  kTotalPath,      // the next visual closure failed total-path validation (d_tot)
   kFilterLost,     // every odometric particle left the graph (or the odometric gate)
   kSequenceBreak,  // a gap in the frames restarted the filters (sequence_break_s)
 };
@@ -202,7 +203,7 @@ struct CatGraphStep {
   // Pending inferences dropped with no visual closure to validate them, and
   // why; `reference_node` is then the closure they hung from.
   std::vector<InferredClosure> lost;
-  InferenceLoss lost_reason = InferenceLoss::kFilterLost;
+  DiscardReason lost_reason = DiscardReason::kFilterLost;
 };
 
 class CatGraphFilter {

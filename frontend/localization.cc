@@ -14,10 +14,10 @@
 namespace catgraph {
 namespace {
 
-constexpr NameTable<DiscardedInference::Reason, 3> kDiscardReasonNames = {{
-    {DiscardedInference::Reason::kTotalPath, "total_path"},
-    {DiscardedInference::Reason::kFilterLost, "filter_lost"},
-    {DiscardedInference::Reason::kSequenceBreak, "sequence_break"},
+constexpr NameTable<DiscardReason, 3> kDiscardReasonNames = {{
+    {DiscardReason::kTotalPath, "total_path"},
+    {DiscardReason::kFilterLost, "filter_lost"},
+    {DiscardReason::kSequenceBreak, "sequence_break"},
 }};
 
 }  // namespace
@@ -125,6 +125,16 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   };
 
   std::map<int, int> visual_closure_of_frame;  // frame -> closure id
+  // The id of the visual closure a step's inferences hung from (-1: none).
+  auto reference_closure = [&](const CatGraphStep& step) {
+    const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
+    return found == visual_closure_of_frame.end() ? -1 : found->second;
+  };
+  auto discard = [&](const InferredClosure& inferred, int reference, int validating, DiscardReason reason) {
+    const int at = frame_of(inferred.node);
+    result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, validating,
+                                           location_error(static_cast<std::size_t>(at), inferred.location), reason});
+  };
   auto add_closure = [&](const LoopClosure& c, double information_scale = 1.0) {
     result.closures.push_back(c);
     Provenance provenance;
@@ -168,8 +178,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
       c.vetoed = aliasing[k].vetoed;
       add_closure(c);
       // CAT-Graph+: what this visual closure validated or discarded.
-      const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
-      const int reference = found == visual_closure_of_frame.end() ? -1 : found->second;
+      const int reference = reference_closure(step);
       for (const InferredClosure& inferred : step.inferred) {
         LoopClosure i;
         i.id = static_cast<int>(result.graph.constraints.size());
@@ -182,27 +191,10 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
         i.parents = {reference, c.id};
         add_closure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inferred.size()) : 1.0);
       }
-      for (const InferredClosure& inferred : step.discarded) {
-        const int at = frame_of(inferred.node);
-        result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, c.id,
-                                               location_error(static_cast<std::size_t>(at), inferred.location)});
-      }
+      for (const InferredClosure& inferred : step.discarded) discard(inferred, reference, c.id, DiscardReason::kTotalPath);
       visual_closure_of_frame[f.frame] = c.id;
     }
-    if (!step.lost.empty()) {
-      const auto found =
-          visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
-      const int reference = found == visual_closure_of_frame.end() ? -1 : found->second;
-      const auto reason = step.lost_reason == InferenceLoss::kSequenceBreak
-                              ? DiscardedInference::Reason::kSequenceBreak
-                              : DiscardedInference::Reason::kFilterLost;
-      for (const InferredClosure& inferred : step.lost) {
-        const int at = frame_of(inferred.node);
-        result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, -1,
-                                               location_error(static_cast<std::size_t>(at), inferred.location),
-                                               reason});
-      }
-    }
+    for (const InferredClosure& inferred : step.lost) discard(inferred, reference_closure(step), -1, step.lost_reason);
     f.inference_pending = step.inference_pending;
     result.frames.push_back(f);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
@@ -212,6 +204,6 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   return result;
 }
 
-std::string_view ToString(DiscardedInference::Reason reason) { return NameOf(kDiscardReasonNames, reason); }
+std::string_view ToString(DiscardReason reason) { return NameOf(kDiscardReasonNames, reason); }
 
 }  // namespace catgraph

@@ -53,17 +53,16 @@ struct LoopClosure {
 
 // Inferences that passed local validation and were not emitted: they failed
 // total-path validation at the next visual closure, or were dropped before
-// one came (InferenceLoss).
+// one came (DiscardReason).
 struct DiscardedInference {
-  enum class Reason { kTotalPath, kFilterLost, kSequenceBreak };
   int frame = -1, matched_frame = -1;
   int reference_closure = -1;     // the visual closure they hung from
   int validating_closure = -1;    // the one whose d_tot check failed; -1 for the others
   double error_m = kNoError;
-  Reason reason = Reason::kTotalPath;
+  DiscardReason reason = DiscardReason::kTotalPath;
 };
 // "total_path", "filter_lost", "sequence_break".
-std::string_view ToString(DiscardedInference::Reason reason);
+std::string_view ToString(DiscardReason reason);
 
 struct LocalizationResult {
   std::vector<FrameLocalization> frames;

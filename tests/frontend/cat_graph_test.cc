@@ -206,7 +206,7 @@ TEST_CASE("Pending inferences a sequence break drops are reported, not lost sile
   REQUIRE(run.steps[static_cast<std::size_t>(gap - 1)].inference_pending);
   const CatGraphStep& at = run.steps[static_cast<std::size_t>(gap)];
   REQUIRE_FALSE(at.lost.empty());
-  CHECK(at.lost_reason == InferenceLoss::kSequenceBreak);
+  CHECK(at.lost_reason == DiscardReason::kSequenceBreak);
   CHECK(at.reference_node >= 0);
   // The last visual closure before the break, which they hung from.
   REQUIRE(at.reference_node < gap);
