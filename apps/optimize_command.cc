@@ -119,7 +119,7 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--cost", o->cost,
                   "Objective: g2o (full information) or chordal (SE-Sync's F, compares with "
-                  "certified optima; not with --method switchable)")
+                  "certified optima)")
       ->check(CLI::IsMember({"g2o", "chordal"}))
       ->capture_default_str();
   cmd->add_option("--report", o->report,
@@ -130,8 +130,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
                 "Print one JSON object (iterations, initial_cost, final_cost, chi2, time_s, "
                 "accepted, rejected, ...)");
   cmd->add_option("--switch-gate", o->optimizer.switch_gate_probability,
-                  "Switchable: a closure is rejected when its chi2 exceeds the chi2(dof) "
-                  "quantile at this probability (sets each switch prior; no per-dataset tuning)")
+                  "Every method: a closure is rejected when its chi2 (chordal cost) exceeds "
+                  "the chi2(dof) quantile (the chordal cost's) at this probability (sets each "
+                  "switch prior and the losses' scales; no per-dataset tuning)")
       ->capture_default_str();
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
                   "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "

@@ -89,117 +89,30 @@ struct RelativePoseTraits<Pose3> {
   }
 };
 
-// r = U e.
+// The residual of a relative-pose measurement, as a policy of the cost
+// functors below: `kResiduals` values from the two poses' parameter blocks.
+//
+// g2o's: r = U e.
 template <typename PoseT>
-class RelativePoseCost {
+class G2oResidual {
  public:
-  static constexpr int kN = RelativePoseTraits<PoseT>::kResiduals;
-  using SqrtInformation = Eigen::Matrix<double, kN, kN>;
+  static constexpr int kResiduals = RelativePoseTraits<PoseT>::kResiduals;
+  static constexpr int kParameters = RelativePoseTraits<PoseT>::kParameters;
+  using SqrtInformation = Eigen::Matrix<double, kResiduals, kResiduals>;
 
-  RelativePoseCost(const PoseT& measurement, const SqrtInformation& sqrt_information)
+  G2oResidual(const PoseT& measurement, const SqrtInformation& sqrt_information)
       : measurement_(measurement), sqrt_information_(sqrt_information) {}
 
   template <typename T>
-  bool operator()(const T* pose_i, const T* pose_j, T* residuals) const {
-    Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
+  void operator()(const T* pose_i, const T* pose_j, T* residuals) const {
+    Eigen::Map<Eigen::Matrix<T, kResiduals, 1>> r(residuals);
     r = sqrt_information_.template cast<T>() *
         RelativePoseTraits<PoseT>::Error(pose_i, pose_j, measurement_);
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const PoseT& measurement, const SqrtInformation& sqrt_info) {
-    constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
-    return new ceres::AutoDiffCostFunction<RelativePoseCost, kN, kP, kP>(
-        new RelativePoseCost(measurement, sqrt_info));
   }
 
  private:
   PoseT measurement_;
   SqrtInformation sqrt_information_;
-};
-
-// Switchable constraint (Suenderhauf & Protzel 2012): r = Psi(s) U e, with
-// Psi(s) = s (s bounded to [0, 1] by the problem) or the sigmoid
-// Psi(s) = 1 / (1 + exp(-s)) (s unbounded). dr/ds = Psi'(s) U e.
-template <typename PoseT>
-class SwitchableRelativePoseCost {
- public:
-  static constexpr int kN = RelativePoseTraits<PoseT>::kResiduals;
-  using SqrtInformation = Eigen::Matrix<double, kN, kN>;
-
-  SwitchableRelativePoseCost(const PoseT& measurement, const SqrtInformation& sqrt_information,
-                             SwitchFunction function)
-      : measurement_(measurement), sqrt_information_(sqrt_information), function_(function) {}
-
-  template <typename T>
-  bool operator()(const T* pose_i, const T* pose_j, const T* s, T* residuals) const {
-    Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
-    r = Psi(s[0], function_) * (sqrt_information_.template cast<T>() *
-                                 RelativePoseTraits<PoseT>::Error(pose_i, pose_j, measurement_));
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const PoseT& measurement, const SqrtInformation& sqrt_info,
-                                     SwitchFunction function) {
-    constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
-    return new ceres::AutoDiffCostFunction<SwitchableRelativePoseCost, kN, kP, kP, 1>(
-        new SwitchableRelativePoseCost(measurement, sqrt_info, function));
-  }
-
- private:
-  PoseT measurement_;
-  SqrtInformation sqrt_information_;
-  SwitchFunction function_;
-};
-
-// A switchable constraint whose residual is also scaled by other switches
-// (the coupled closure hierarchy: a child closure by its parents'):
-// r = Psi(s_0) Psi(s_1) ... Psi(s_k) U e. Parameter blocks: pose i, pose j,
-// then the k + 1 switches, own first. The number of switches is known only at
-// run time, hence the dynamic cost function.
-template <typename PoseT>
-class CoupledSwitchableRelativePoseCost {
- public:
-  static constexpr int kN = RelativePoseTraits<PoseT>::kResiduals;
-  using SqrtInformation = Eigen::Matrix<double, kN, kN>;
-
-  CoupledSwitchableRelativePoseCost(const PoseT& measurement, const SqrtInformation& sqrt_information,
-                                    SwitchFunction function, int num_switches)
-      : measurement_(measurement),
-        sqrt_information_(sqrt_information),
-        function_(function),
-        num_switches_(num_switches) {}
-
-  template <typename T>
-  bool operator()(T const* const* parameters, T* residuals) const {
-    T scale(1.0);
-    for (int k = 0; k < num_switches_; ++k) {
-      scale *= Psi(parameters[2 + k][0], function_);
-    }
-    Eigen::Map<Eigen::Matrix<T, kN, 1>> r(residuals);
-    r = scale * (sqrt_information_.template cast<T>() *
-                 RelativePoseTraits<PoseT>::Error(parameters[0], parameters[1], measurement_));
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const PoseT& measurement, const SqrtInformation& sqrt_info,
-                                     SwitchFunction function, int num_switches) {
-    constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
-    // Stride 4: a 3D pose block (7) takes two passes, a switch one.
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<CoupledSwitchableRelativePoseCost, 4>(
-        new CoupledSwitchableRelativePoseCost(measurement, sqrt_info, function, num_switches));
-    cost->AddParameterBlock(kP);
-    cost->AddParameterBlock(kP);
-    for (int k = 0; k < num_switches; ++k) cost->AddParameterBlock(1);
-    cost->SetNumResiduals(kN);
-    return cost;
-  }
-
- private:
-  PoseT measurement_;
-  SqrtInformation sqrt_information_;
-  SwitchFunction function_;
-  int num_switches_;
 };
 
 // SE-Sync's chordal cost (Rosen et al., IJRR 2019):
@@ -214,17 +127,17 @@ Eigen::Matrix<T, 2, 2> RotationOfParameters2(const T* pose) {
 }
 
 template <typename PoseT>
-class ChordalRelativePoseCost {
+class ChordalResidual {
  public:
   static constexpr int kD = std::is_same_v<PoseT, Pose2> ? 2 : 3;
   static constexpr int kResiduals = kD * kD + kD;
-  static constexpr int kP = RelativePoseTraits<PoseT>::kParameters;
+  static constexpr int kParameters = RelativePoseTraits<PoseT>::kParameters;
 
-  ChordalRelativePoseCost(const PoseT& measurement, const ChordalWeights& weights)
+  ChordalResidual(const PoseT& measurement, const ChordalWeights& weights)
       : measurement_(measurement), weights_(weights) {}
 
   template <typename T>
-  bool operator()(const T* pose_i, const T* pose_j, T* residuals) const {
+  void operator()(const T* pose_i, const T* pose_j, T* residuals) const {
     Eigen::Matrix<T, kD, kD> r_i, r_j;
     Eigen::Matrix<T, kD, 1> t_i, t_j;
     Eigen::Matrix<double, kD, kD> r_z;
@@ -251,17 +164,106 @@ class ChordalRelativePoseCost {
       for (int r = 0; r < kD; ++r) residuals[c * kD + r] = sqrt_kappa * dr(r, c);
     }
     for (int k = 0; k < kD; ++k) residuals[kD * kD + k] = sqrt_tau * dt(k);
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const PoseT& measurement, const ChordalWeights& weights) {
-    return new ceres::AutoDiffCostFunction<ChordalRelativePoseCost, kResiduals, kP, kP>(
-        new ChordalRelativePoseCost(measurement, weights));
   }
 
  private:
   PoseT measurement_;
   ChordalWeights weights_;
+};
+
+// A relative-pose constraint: r = the residual (G2oResidual or ChordalResidual).
+template <typename Residual>
+class RelativePoseCost {
+ public:
+  static constexpr int kN = Residual::kResiduals;
+  static constexpr int kP = Residual::kParameters;
+
+  explicit RelativePoseCost(const Residual& residual) : residual_(residual) {}
+
+  template <typename T>
+  bool operator()(const T* pose_i, const T* pose_j, T* residuals) const {
+    residual_(pose_i, pose_j, residuals);
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Residual& residual) {
+    return new ceres::AutoDiffCostFunction<RelativePoseCost, kN, kP, kP>(new RelativePoseCost(residual));
+  }
+
+ private:
+  Residual residual_;
+};
+
+// Switchable constraint (Suenderhauf & Protzel 2012): r = Psi(s) r_0, with
+// r_0 the residual, Psi(s) = s (s bounded to [0, 1] by the problem) or the
+// sigmoid Psi(s) = 1 / (1 + exp(-s)) (s unbounded). dr/ds = Psi'(s) r_0.
+template <typename Residual>
+class SwitchableRelativePoseCost {
+ public:
+  static constexpr int kN = Residual::kResiduals;
+  static constexpr int kP = Residual::kParameters;
+
+  SwitchableRelativePoseCost(const Residual& residual, SwitchFunction function)
+      : residual_(residual), function_(function) {}
+
+  template <typename T>
+  bool operator()(const T* pose_i, const T* pose_j, const T* s, T* residuals) const {
+    residual_(pose_i, pose_j, residuals);
+    const T scale = Psi(s[0], function_);
+    for (int k = 0; k < kN; ++k) residuals[k] *= scale;
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Residual& residual, SwitchFunction function) {
+    return new ceres::AutoDiffCostFunction<SwitchableRelativePoseCost, kN, kP, kP, 1>(
+        new SwitchableRelativePoseCost(residual, function));
+  }
+
+ private:
+  Residual residual_;
+  SwitchFunction function_;
+};
+
+// A switchable constraint whose residual is also scaled by other switches
+// (the coupled closure hierarchy: a child closure by its parents'):
+// r = Psi(s_0) Psi(s_1) ... Psi(s_k) r_0. Parameter blocks: pose i, pose j,
+// then the k + 1 switches, own first. The number of switches is known only at
+// run time, hence the dynamic cost function.
+template <typename Residual>
+class CoupledSwitchableRelativePoseCost {
+ public:
+  static constexpr int kN = Residual::kResiduals;
+  static constexpr int kP = Residual::kParameters;
+
+  CoupledSwitchableRelativePoseCost(const Residual& residual, SwitchFunction function, int num_switches)
+      : residual_(residual), function_(function), num_switches_(num_switches) {}
+
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residuals) const {
+    T scale(1.0);
+    for (int k = 0; k < num_switches_; ++k) {
+      scale *= Psi(parameters[2 + k][0], function_);
+    }
+    residual_(parameters[0], parameters[1], residuals);
+    for (int k = 0; k < kN; ++k) residuals[k] *= scale;
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Residual& residual, SwitchFunction function, int num_switches) {
+    // Stride 4: a 3D pose block (7) takes two passes, a switch one.
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<CoupledSwitchableRelativePoseCost, 4>(
+        new CoupledSwitchableRelativePoseCost(residual, function, num_switches));
+    cost->AddParameterBlock(kP);
+    cost->AddParameterBlock(kP);
+    for (int k = 0; k < num_switches; ++k) cost->AddParameterBlock(1);
+    cost->SetNumResiduals(kN);
+    return cost;
+  }
+
+ private:
+  Residual residual_;
+  SwitchFunction function_;
+  int num_switches_;
 };
 
 // Switch prior: r = sqrt(information) (gamma - s).

@@ -4,6 +4,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include <Eigen/Cholesky>
@@ -49,6 +50,23 @@ ChordalWeights ChordalWeightsOf(const Eigen::Matrix<double, N, N>& information) 
 template ChordalWeights ChordalWeightsOf<3>(const Eigen::Matrix<double, 3, 3>&);
 template ChordalWeights ChordalWeightsOf<6>(const Eigen::Matrix<double, 6, 6>&);
 
+namespace {
+
+// make(residual) with the residual of `cost`: g2o's error scaled by U, or the
+// chordal residual.
+template <typename PoseT, typename Make>
+std::unique_ptr<ceres::CostFunction> NewRelativePoseCost(
+    RelativePoseCostType cost, const PoseT& mean,
+    const Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim>& sqrt_information,
+    const ChordalWeights& chordal_weights, const Make& make) {
+  if (cost == RelativePoseCostType::kChordal) {
+    return std::unique_ptr<ceres::CostFunction>(make(ChordalResidual<PoseT>(mean, chordal_weights)));
+  }
+  return std::unique_ptr<ceres::CostFunction>(make(G2oResidual<PoseT>(mean, sqrt_information)));
+}
+
+}  // namespace
+
 template <typename PoseT>
 BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
                                     const RelativePoseMeasurement<PoseT>& measurement,
@@ -68,12 +86,9 @@ BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
 
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> BetweenFactor<PoseT>::NewCostFunction() const {
-  if (cost_ == RelativePoseCostType::kChordal) {
-    return std::unique_ptr<ceres::CostFunction>(
-        ChordalRelativePoseCost<PoseT>::Create(mean_, chordal_weights_));
-  }
-  return std::unique_ptr<ceres::CostFunction>(
-      RelativePoseCost<PoseT>::Create(mean_, sqrt_information_));
+  return NewRelativePoseCost(cost_, mean_, sqrt_information_, chordal_weights_, [](const auto& residual) {
+    return RelativePoseCost<std::decay_t<decltype(residual)>>::Create(residual);
+  });
 }
 
 std::unique_ptr<ceres::LossFunction> NewLoss(const RobustLoss& loss) {
@@ -96,14 +111,16 @@ std::unique_ptr<ceres::LossFunction> BetweenFactor<PoseT>::NewLossFunction() con
 template <typename PoseT>
 SwitchableBetweenFactor<PoseT>::SwitchableBetweenFactor(
     PoseId from, PoseId to, SwitchId switch_id, const RelativePoseMeasurement<PoseT>& measurement,
-    SwitchFunction function, std::vector<SwitchId> coupled)
+    SwitchFunction function, std::vector<SwitchId> coupled, RelativePoseCostType cost)
     : from_(from),
       to_(to),
       switch_(switch_id),
       coupled_(std::move(coupled)),
       mean_(measurement.mean),
       sqrt_information_(SqrtInformation<PoseT::kTangentDim>(measurement.information)),
-      function_(function) {
+      chordal_weights_(ChordalWeightsOf<PoseT::kTangentDim>(measurement.information)),
+      function_(function),
+      cost_(cost) {
   std::set<SwitchId> seen = {switch_};
   for (const SwitchId s : coupled_) {
     if (!seen.insert(s).second) {
@@ -122,12 +139,14 @@ std::vector<Key> SwitchableBetweenFactor<PoseT>::keys() const {
 
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> SwitchableBetweenFactor<PoseT>::NewCostFunction() const {
-  if (!coupled_.empty()) {
-    return std::unique_ptr<ceres::CostFunction>(CoupledSwitchableRelativePoseCost<PoseT>::Create(
-        mean_, sqrt_information_, function_, static_cast<int>(coupled_.size()) + 1));
-  }
-  return std::unique_ptr<ceres::CostFunction>(
-      SwitchableRelativePoseCost<PoseT>::Create(mean_, sqrt_information_, function_));
+  const int num_switches = static_cast<int>(coupled_.size()) + 1;
+  return NewRelativePoseCost(cost_, mean_, sqrt_information_, chordal_weights_, [&](const auto& residual) {
+    using Residual = std::decay_t<decltype(residual)>;
+    if (num_switches > 1) {
+      return CoupledSwitchableRelativePoseCost<Residual>::Create(residual, function_, num_switches);
+    }
+    return SwitchableRelativePoseCost<Residual>::Create(residual, function_);
+  });
 }
 
 template <typename PoseT>

@@ -81,14 +81,16 @@ class BetweenFactor : public Factor {
 // r = Psi(s) U e (Suenderhauf & Protzel 2012). With coupled switches s_k
 // (the switches of the closures this one depends on: its parents in the
 // closure hierarchy), r = Psi(s) prod_k Psi(s_k) U e, so that switching a
-// parent off switches the child off in the same solve.
+// parent off switches the child off in the same solve. With the chordal
+// cost, the chordal residual takes U e's place.
 template <typename PoseT>
 class SwitchableBetweenFactor : public Factor {
  public:
   SwitchableBetweenFactor(PoseId from, PoseId to, SwitchId switch_id,
                           const RelativePoseMeasurement<PoseT>& measurement,
                           SwitchFunction function = SwitchFunction::kLinear,
-                          std::vector<SwitchId> coupled = {});
+                          std::vector<SwitchId> coupled = {},
+                          RelativePoseCostType cost = RelativePoseCostType::kG2o);
   std::vector<Key> keys() const override;
   std::unique_ptr<ceres::CostFunction> NewCostFunction() const override;
   std::vector<ParameterBound> bounds() const override;
@@ -99,7 +101,9 @@ class SwitchableBetweenFactor : public Factor {
   std::vector<SwitchId> coupled_;
   PoseT mean_;
   Eigen::Matrix<double, PoseT::kTangentDim, PoseT::kTangentDim> sqrt_information_;
+  ChordalWeights chordal_weights_;
   SwitchFunction function_;
+  RelativePoseCostType cost_;
 };
 
 // r = sqrt(information) (gamma - s).

@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <variant>
 
 #include "backend/chi_square.h"
@@ -48,19 +49,40 @@ double GraphChi2(const PoseGraph<PoseT>& graph) {
 Eigen::Matrix2d RotationMatrixOf(const Pose2& p) { return p.rotation(); }
 Eigen::Matrix3d RotationMatrixOf(const Pose3& p) { return p.rotation().toRotationMatrix(); }
 
+// SE-Sync's chordal cost of one constraint (cost_functors.h's ChordalResidual).
+template <typename PoseT>
+double EdgeChordalCost(const PoseGraph<PoseT>& graph, const Constraint<PoseT>& c) {
+  const PoseT& xi = *graph.vertices.at(c.from).pose;
+  const PoseT& xj = *graph.vertices.at(c.to).pose;
+  const auto w = ChordalWeightsOf<PoseT::kTangentDim>(c.measurement.information);
+  const auto ri = RotationMatrixOf(xi);
+  return w.kappa * (RotationMatrixOf(xj) - ri * RotationMatrixOf(c.measurement.mean)).squaredNorm() +
+         w.tau * (xj.translation() - xi.translation() - ri * c.measurement.mean.translation()).squaredNorm();
+}
+
+// A constraint's squared residual norm in the objective `cost`: what the
+// robust methods weigh and the gate is a quantile of.
+template <typename PoseT>
+double EdgeCost(const PoseGraph<PoseT>& graph, const Constraint<PoseT>& c, RelativePoseCostType cost) {
+  return cost == RelativePoseCostType::kChordal ? EdgeChordalCost(graph, c) : EdgeChi2(graph, c);
+}
+
 template <typename PoseT>
 double GraphChordalCost(const PoseGraph<PoseT>& graph) {
   double f = 0.0;
-  for (const auto& c : graph.constraints) {
-    const PoseT& xi = *graph.vertices.at(c.from).pose;
-    const PoseT& xj = *graph.vertices.at(c.to).pose;
-    const auto w = ChordalWeightsOf<PoseT::kTangentDim>(c.measurement.information);
-    const auto ri = RotationMatrixOf(xi);
-    f += w.kappa * (RotationMatrixOf(xj) - ri * RotationMatrixOf(c.measurement.mean)).squaredNorm();
-    f += w.tau * (xj.translation() - xi.translation() - ri * c.measurement.mean.translation())
-                     .squaredNorm();
-  }
+  for (const auto& c : graph.constraints) f += EdgeChordalCost(graph, c);
   return f;
+}
+
+// The gate every method decides at (docs/backend.md): the quantile of a true
+// closure's squared residual norm, chi2(dof) for g2o's error, the chordal
+// cost's own distribution for the chordal one.
+template <typename PoseT>
+double Gate(RelativePoseCostType cost, double probability) {
+  if (cost == RelativePoseCostType::kChordal) {
+    return ChordalCostQuantile(std::is_same_v<PoseT, Pose2> ? 2 : 3, probability);
+  }
+  return ChiSquareQuantile(PoseT::kTangentDim, probability);
 }
 
 // The loss of a method. Unset parameters (0) are set from the chi2 gate g so
@@ -108,8 +130,8 @@ constexpr NameTable<InitialGuess, 4> kInitialGuessNames = {{
 
 // Truncated least squares by graduated non-convexity (Yang, Antonante,
 // Tzoumas, Carlone, RA-L 2020, Algorithm 1 with the TLS surrogate). With the
-// threshold cbar^2 (the chi2 gate) and the residuals r^2 = chi2 of the
-// robust closures: start from all weights 1, mu0 = cbar^2 / (2 max r^2 -
+// threshold cbar^2 (the gate) and the residuals r^2 (chi2, or the chordal
+// cost) of the robust closures: start from all weights 1, mu0 = cbar^2 / (2 max r^2 -
 // cbar^2); each round solves the weighted problem from the last poses, then
 //   w = 1                               r^2 <= mu/(mu+1) cbar^2
 //   w = 0                               r^2 >= (mu+1)/mu cbar^2
@@ -144,7 +166,7 @@ Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& optio
     if (!s.IsUsable()) break;
     double max_r2 = 0.0;
     std::map<ClosureId, double> r2;
-    for (const auto& [id, c] : closures) max_r2 = std::max(max_r2, r2[id] = EdgeChi2(graph, *c));
+    for (const auto& [id, c] : closures) max_r2 = std::max(max_r2, r2[id] = EdgeCost(graph, *c, options.cost));
     if (round == 0) {
       if (max_r2 <= cbar2) break;  // every closure is an inlier: least squares is the answer
       mu = cbar2 / (2.0 * max_r2 - cbar2);
@@ -170,10 +192,11 @@ Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& optio
 }
 
 // Sets the graph's poses as `guess` says; returns the guess used (kAuto's
-// choice). `truncation` is the chi2 at which kAuto's cost of a robust
-// constraint stops growing.
+// choice). `truncation` is the cost (in the objective `cost`) at which
+// kAuto's cost of a robust constraint stops growing.
 template <typename PoseT, typename IsRobust>
-InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, double truncation, IsRobust robust) {
+InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, RelativePoseCostType cost,
+                        double truncation, IsRobust robust) {
   switch (guess) {
     case InitialGuess::kFile: InitializeBySpanningTree(graph); break;
     case InitialGuess::kSpanningTree: InitializeBySpanningTree(graph, /*overwrite=*/true); break;
@@ -186,15 +209,15 @@ InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, double trun
       } catch (const std::invalid_argument&) {
         return InitialGuess::kFile;  // disconnected: only the file's poses exist
       }
-      auto cost = [&](const PoseGraph<PoseT>& g) {
+      auto robust_cost = [&](const PoseGraph<PoseT>& g) {
         double sum = 0.0;
         for (const auto& c : g.constraints) {
-          const double chi2 = EdgeChi2(g, c);
-          sum += robust(c) ? std::min(chi2, truncation) : chi2;
+          const double edge = EdgeCost(g, c, cost);
+          sum += robust(c) ? std::min(edge, truncation) : edge;
         }
         return sum;
       };
-      if (cost(chordal) >= cost(graph)) return InitialGuess::kFile;
+      if (robust_cost(chordal) >= robust_cost(graph)) return InitialGuess::kFile;
       graph.vertices = std::move(chordal.vertices);
       return InitialGuess::kChordal;
     }
@@ -205,8 +228,7 @@ InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, double trun
 template <typename PoseT>
 PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
   const bool switchable = options.method == RobustMethod::kSwitchable;
-  // The chi2 gate every method decides at (docs/backend.md).
-  const double gate = ChiSquareQuantile(PoseT::kTangentDim, options.switch_gate_probability);
+  const double gate = Gate<PoseT>(options.cost, options.switch_gate_probability);
   const RobustLoss loss = LossFor(options, gate);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
@@ -215,7 +237,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
                           std::any_of(graph.constraints.begin(), graph.constraints.end(),
                                       [](const auto& c) { return c.switch_id.has_value(); });
   const InitialGuess initial_guess = Initialize(
-      graph, options.initial_guess, any_robust ? gate : std::numeric_limits<double>::infinity(),
+      graph, options.initial_guess, options.cost, any_robust ? gate : std::numeric_limits<double>::infinity(),
       [&](const Constraint<PoseT>& c) { return robust(c) || c.switch_id.has_value(); });
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
 
@@ -298,7 +320,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
         const auto coupled = coupled_switches.find(c.id);
         factors.Emplace<SwitchableBetweenFactor<PoseT>>(
             c.from, c.to, *c.switch_id, c.measurement, options.switch_function,
-            coupled == coupled_switches.end() ? std::vector<SwitchId>{} : coupled->second);
+            coupled == coupled_switches.end() ? std::vector<SwitchId>{} : coupled->second, options.cost);
         continue;
       }
       RobustLoss edge_loss = robust(c) ? loss : RobustLoss{};
@@ -351,7 +373,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     } else if (options.method == RobustMethod::kGnc && robust(c)) {
       d.weight = gnc_weights.at(c.id);
     } else if (robust(c)) {
-      d.weight = std::sqrt(LossDerivative(loss, EdgeChi2(graph, c)));
+      d.weight = std::sqrt(LossDerivative(loss, EdgeCost(graph, c, options.cost)));
     }
     if (!c.switch_id) own = d.weight;
     d.own_weight = own;
@@ -461,11 +483,6 @@ void Validate(const PoseGraphOptimizerOptions& o) {
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {
     throw std::invalid_argument("loss_scale_sigma must be >= 0 (0: from the gate)");
-  }
-  if (o.cost == RelativePoseCostType::kChordal && o.method == RobustMethod::kSwitchable) {
-    throw std::invalid_argument(
-        "the chordal cost is not available with switchable constraints; use --method none, "
-        "dcs, cauchy or huber");
   }
   Validate(o.solver);
 }
