@@ -131,8 +131,8 @@ constexpr NameTable<InitialGuess, 4> kInitialGuessNames = {{
 // Truncated least squares by graduated non-convexity (Yang, Antonante,
 // Tzoumas, Carlone, RA-L 2020, Algorithm 1 with the TLS surrogate). With the
 // threshold cbar^2 (the gate) and the residuals r^2 (chi2, or the chordal
-// cost) of the robust closures: start from all weights 1, mu0 = cbar^2 / (2 max r^2 -
-// cbar^2); each round solves the weighted problem from the last poses, then
+// cost) of the robust closures: start from all weights 1, mu0 = cbar^2 /
+// (2 max r^2 - cbar^2); each round solves the weighted problem from the last poses, then
 //   w = 1                               r^2 <= mu/(mu+1) cbar^2
 //   w = 0                               r^2 >= (mu+1)/mu cbar^2
 //   w = cbar/r sqrt(mu (mu+1)) - mu     otherwise
@@ -166,7 +166,9 @@ Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& optio
     if (!s.IsUsable()) break;
     double max_r2 = 0.0;
     std::map<ClosureId, double> r2;
-    for (const auto& [id, c] : closures) max_r2 = std::max(max_r2, r2[id] = EdgeCost(graph, *c, options.cost));
+    for (const auto& [id, c] : closures) {
+      max_r2 = std::max(max_r2, r2[id] = EdgeCost(graph, *c, options.cost));
+    }
     if (round == 0) {
       if (max_r2 <= cbar2) break;  // every closure is an inlier: least squares is the answer
       mu = cbar2 / (2.0 * max_r2 - cbar2);

@@ -42,8 +42,9 @@ enum class InitialGuess {
   // kFile or kChordal, whichever has the lower robust cost: the cost (chi2,
   // or the chordal cost with `cost` kChordal) of the trusted constraints
   // plus, for the robust ones, min(cost, gate) (the truncated least-squares
-  // cost the gate decides by; the plain cost for method none). A file's poorly chained odometry (MIT) loses to chordal;
-  // a chordal guess bent by false closures loses to the file's.
+  // cost the gate decides by; the plain cost for method none). A file's
+  // poorly chained odometry (MIT) loses to chordal; a chordal guess bent by
+  // false closures loses to the file's.
   kAuto,
 };
 

@@ -17,8 +17,11 @@
 # (> 2 GB) or sanitizer report leaves its input in build-fuzz/artifacts/TARGET/
 # and makes the script exit non-zero. FUZZ_BUILD_DIR names another build folder
 # configured with clang and -DCATGRAPH_FUZZ=ON; FUZZ_SEED fixes libFuzzer's
-# random seed (default 0: a new one each run). Expects scripts/setup.sh to have
-# installed the packages (clang-14, libclang-rt-14-dev among them).
+# random seed (default 0: a new one each run). FUZZ_LANE names a second
+# campaign on the same targets running beside the first (their own logs,
+# TARGET-LANE.log; the corpus is shared, as with libFuzzer's -jobs). Expects
+# scripts/setup.sh to have installed the packages (clang-14, libclang-rt-14-dev
+# among them).
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -106,10 +109,12 @@ max_len_of() {
 # sanitizer runtime's own memory grows by 2-8 KB per execution on the
 # yaml-cpp targets (a release build of the same readers stays flat), and one
 # process of 10^7 executions would pass the 2 GB limit.
+log_of() { echo "$build_dir/$1${FUZZ_LANE:+-$FUZZ_LANE}.log"; }
 run() {
-  local t="$1" scratch rc=0 remaining="${FUZZ_RUNS:--1}" chunk="${FUZZ_CHUNK:-500000}" runs done_now
+  local t="$1" log scratch rc=0 remaining="${FUZZ_RUNS:--1}" chunk="${FUZZ_CHUNK:-500000}" runs done_now
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
-  : >"$build_dir/$t.log"
+  log="$(log_of "$t")"
+  : >"$log"
   while :; do
     runs="$remaining"
     if [ "$remaining" -gt 0 ] && [ "$remaining" -gt "$chunk" ]; then runs="$chunk"; fi
@@ -118,10 +123,10 @@ run() {
     TMPDIR="$scratch" "$build_dir/fuzz/${t}_fuzzer" -max_total_time="$seconds" -runs="$runs" -timeout="${FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 \
       -print_final_stats=1 -seed="${FUZZ_SEED:-0}" \
       -artifact_prefix="$build_dir/artifacts/$t/" $(dict_of "$t") $(max_len_of "$t") "$build_dir/corpus/$t" \
-      >>"$build_dir/$t.log" 2>&1 || rc=$?
+      >>"$log" 2>&1 || rc=$?
     rm -rf "$scratch"
     [ "$rc" -eq 0 ] && [ "$remaining" -gt 0 ] || break
-    done_now=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | tail -1 | grep -o '[0-9]*$')
+    done_now=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$')
     remaining=$((remaining - done_now))
     [ "$remaining" -gt 0 ] || break
   done
@@ -140,11 +145,12 @@ done
 for p in "${pids[@]}"; do wait "$p" || status=1; done
 printf '%-12s %14s %10s %s\n' target executions exec/s result
 for t in "${targets[@]}"; do
+  log="$(log_of "$t")"
   # Sums over the chain of processes; the rate is their mean.
-  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build_dir/$t.log" | awk '{s += $2} END {print s + 0}')
-  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$build_dir/$t.log" | awk '{s += $2; n++} END {print n ? int(s / n) : 0}')
-  if grep -qE 'ERROR: (libFuzzer|AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer)|runtime error:|Test unit written' "$build_dir/$t.log"; then
-    result="FINDING: $build_dir/$t.log"
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | awk '{s += $2} END {print s + 0}')
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | awk '{s += $2; n++} END {print n ? int(s / n) : 0}')
+  if grep -qE 'ERROR: (libFuzzer|AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer)|runtime error:|Test unit written' "$log"; then
+    result="FINDING: $log"
     status=1
   else
     result=ok

@@ -173,8 +173,9 @@ TEST_CASE("coupled switchable functor: Jacobians match, residual is the product 
       {
         const Pose3 xi = RandomPose3(rng), z = RandomPose3(rng);
         const Pose3 xj = xi * z * Pose3(Eigen::Vector3d(0.3, 0.1, 0.0), Eigen::Quaterniond(1.0, 0.1, 0.0, -0.1));
-        std::unique_ptr<ceres::CostFunction> coupled(CoupledSwitchableRelativePoseCost<G2oResidual<Pose3>>::Create(
-            {z, SqrtInformation<6>(RandomInformation<6>(rng))}, f, 2));
+        std::unique_ptr<ceres::CostFunction> coupled(
+            CoupledSwitchableRelativePoseCost<G2oResidual<Pose3>>::Create(
+                {z, SqrtInformation<6>(RandomInformation<6>(rng))}, f, 2));
         auto bi = Block(xi), bj = Block(xj);
         CheckGradients(*coupled, {&manifold, &manifold, nullptr, nullptr}, {bi.data(), bj.data(), &s[0], &s[1]});
       }
@@ -250,7 +251,8 @@ TEST_CASE("chordal functors: Jacobians match, |r|^2 is SE-Sync's cost, times the
       std::unique_ptr<ceres::CostFunction> switched(
           SwitchableRelativePoseCost<ChordalResidual<Pose2>>::Create(residual, SwitchFunction::kLinear));
       std::unique_ptr<ceres::CostFunction> coupled(
-          CoupledSwitchableRelativePoseCost<ChordalResidual<Pose2>>::Create(residual, SwitchFunction::kLinear, 2));
+          CoupledSwitchableRelativePoseCost<ChordalResidual<Pose2>>::Create(residual, SwitchFunction::kLinear,
+                                                                            2));
       auto bi = Block(xi), bj = Block(xj);
       CheckGradients(*plain, {nullptr, nullptr}, {bi.data(), bj.data()});
       CheckGradients(*switched, {nullptr, nullptr, nullptr}, {bi.data(), bj.data(), &s[0]});
@@ -269,7 +271,8 @@ TEST_CASE("chordal functors: Jacobians match, |r|^2 is SE-Sync's cost, times the
     }
     {
       const Pose3 xi = RandomPose3(rng), z = RandomPose3(rng);
-      const Pose3 xj = xi * z * Pose3(Eigen::Vector3d(0.3, 0.1, 0.0), Eigen::Quaterniond(1.0, 0.1, 0.0, -0.1));
+      const Pose3 xj =
+          xi * z * Pose3(Eigen::Vector3d(0.3, 0.1, 0.0), Eigen::Quaterniond(1.0, 0.1, 0.0, -0.1));
       const ChordalWeights w = ChordalWeightsOf<6>(RandomInformation<6>(rng));
       const ChordalResidual<Pose3> residual(z, w);
       std::unique_ptr<ceres::CostFunction> plain(RelativePoseCost<ChordalResidual<Pose3>>::Create(residual));
