@@ -202,7 +202,13 @@ void ForEachItem(MapReader& r, const std::string& key, Fn fn) {
 void CheckRoutes(const Scenario& s, const YAML::Node& traversals, const std::string& source) {
   for (std::size_t i = 0; i < s.traversals.size(); ++i) {
     const TraversalPlan& t = s.traversals[i];
-    const auto route = OffsetRoute(t.route, t.lateral_offset_m);
+    const int line = traversals[i].Mark().line + 1;
+    std::vector<Eigen::Vector2d> route;
+    try {
+      route = OffsetRoute(t.route, t.lateral_offset_m);
+    } catch (const std::invalid_argument& e) {  // e.g. every waypoint the same
+      throw FileError(source, line, "traversal " + std::to_string(t.id) + ": " + e.what());
+    }
     for (std::size_t k = 1; k < route.size(); ++k) {
       const double length = (route[k] - route[k - 1]).norm();
       for (double d = 0.0; d <= length; d += 0.05) {
@@ -213,7 +219,7 @@ void CheckRoutes(const Scenario& s, const YAML::Node& traversals, const std::str
           where << "traversal " << t.id << ": the route passes within " << kRobotRadiusM
                 << " m of a wall or furniture at (" << p.x() << ", " << p.y()
                 << "); expected a route through free space";
-          throw FileError(source, traversals[i].Mark().line + 1, where.str());
+          throw FileError(source, line, where.str());
         }
       }
     }

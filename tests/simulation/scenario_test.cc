@@ -72,6 +72,10 @@ TEST_CASE("scenario mistakes name the file and the line", "[simulation][scenario
   std::string through = kMinimal;
   through.replace(through.find("[9, 1]"), 6, "[9, 3]");
   CHECK_THAT(ErrorOf(through), Catch::Contains("my.yaml:4: traversal 1: the route passes within"));
+  // A route that stays at one point (a fuzzer's find: it escaped as std::invalid_argument).
+  std::string still = kMinimal;
+  still.replace(still.find("[9, 1]"), 6, "[1.0, 1]");
+  CHECK_THAT(ErrorOf(still), Catch::Contains("my.yaml:4: traversal 1: route: expected at least 2 distinct waypoints"));
   // Furniture that changes outside every changed region.
   CHECK_THAT(ErrorOf(yaml + "furniture:\n  - {name: crate, style: boxes, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("my.yaml:7: furniture 'crate' does not stand in every traversal"));
   CHECK_THAT(ErrorOf(yaml + "furniture:\n  - {name: crate, style: crates, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("unknown furniture style 'crates'"));
