@@ -7,7 +7,7 @@
 # SECONDS per target (default 60; 0 for no time limit); FUZZ_RUNS, when set,
 # stops each target after that many executions instead (the long documented
 # runs: FUZZ_RUNS=10000000 bash scripts/fuzz.sh 0), made of processes of at
-# most FUZZ_CHUNK executions (default 500000). FUZZ_TIMEOUT: seconds of wall
+# most FUZZ_CHUNK executions (default 100000). FUZZ_TIMEOUT: seconds of wall
 # time one input may take (default 10; libFuzzer measures wall time, so a
 # campaign at low priority on a busy machine needs more). TARGETs among graph trajectory scenario
 # dataset sweep vocabulary (default all). The seed corpus is made from the
@@ -105,13 +105,14 @@ max_len_of() {
 }
 # One libFuzzer process for `seconds` (or FUZZ_RUNS executions); with
 # FUZZ_RUNS, a chain of processes of at most FUZZ_CHUNK executions each
-# (default 500000), every one starting from the corpus the last one grew: the
+# (default 100000), every one starting from the corpus the last one grew: the
 # sanitizer runtime's own memory grows by 2-8 KB per execution on the
-# yaml-cpp targets (a release build of the same readers stays flat), and one
-# process of 10^7 executions would pass the 2 GB limit.
+# yaml-cpp targets (a release build of the same readers stays flat), one
+# process of 10^7 executions would pass the 2 GB limit, and a process slows
+# as it ages (docs/fuzzing.md).
 log_of() { echo "$build_dir/$1${FUZZ_LANE:+-$FUZZ_LANE}.log"; }
 run() {
-  local t="$1" log scratch rc=0 remaining="${FUZZ_RUNS:--1}" chunk="${FUZZ_CHUNK:-500000}" runs done_now
+  local t="$1" log scratch rc=0 remaining="${FUZZ_RUNS:--1}" chunk="${FUZZ_CHUNK:-100000}" runs done_now
   mkdir -p "$build_dir/artifacts/$t" "$build_dir/corpus/$t"
   log="$(log_of "$t")"
   : >"$log"
