@@ -46,6 +46,17 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["refined"] = r.refinement.has_value();
   j["refine_iterations"] = r.refinement ? r.refinement->iterations : 0;
   j["refine_time_s"] = r.refinement ? r.refinement->time_s : 0.0;
+  // Where time_s went, and the initial guess's time, which it excludes.
+  Summary solves = r.summary;
+  if (r.refinement) solves.AddTimes(*r.refinement);
+  j["preprocessor_time_s"] = solves.preprocessor_time_s;
+  j["linear_solver_time_s"] = solves.linear_solver_time_s;
+  j["jacobian_time_s"] = solves.jacobian_time_s;
+  j["residual_time_s"] = solves.residual_time_s;
+  j["initial_guess_time_s"] = r.initial_guess_time_s;
+  j["noise_scale"] = r.noise_scale.scale;
+  j["noise_scale_cycles"] = r.noise_scale.cycles;
+  j["gate_factor"] = r.gate_factor;
   j["accepted"] = r.accepted;
   j["rejected"] = r.rejected;
   if (with_closures) {
@@ -85,9 +96,14 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
     out << ReportJson(options, result, false).dump(2) << '\n';
     return;
   }
+  if (result.gate_factor > 1.0) {
+    out << "the graph's short cycles show " << result.gate_factor
+        << " times the noise its information states (" << result.noise_scale.cycles
+        << " cycles): the gate widened by that factor (--no-noise-scale to keep it)\n";
+  }
   out << "optimised " << options.input << " with " << options.method << " from the "
-      << ToString(result.initial_guess) << " initial guess: "
-      << result.summary.BriefReport() << '\n'
+      << ToString(result.initial_guess) << " initial guess (" << result.initial_guess_time_s
+      << " s): " << result.summary.BriefReport() << '\n'
       << (result.refinement ? "refined without the rejected closures: " +
                                    result.refinement->BriefReport() + "\n"
                              : std::string())
@@ -134,6 +150,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
                   "the chi2(dof) quantile (the chordal cost's) at this probability (sets each "
                   "switch prior and the losses' scales; no per-dataset tuning)")
       ->capture_default_str();
+  cmd->add_flag("--no-noise-scale{false}", o->optimizer.estimate_noise_scale,
+                "Keep the gate where the file's information puts it, even when short cycles "
+                "of the graph show its noise to be three times or more what that information states");
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
                   "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "
                   "(Vertigo uses 1); 0 = use the gate")

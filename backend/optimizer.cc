@@ -1,5 +1,6 @@
 #include "backend/optimizer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -37,6 +38,14 @@ std::string Summary::BriefReport() const {
   out << kNames[static_cast<int>(termination)] << ": " << iterations << " iterations, cost "
       << initial_cost << " -> " << final_cost << ", " << time_s << " s (" << message << ")";
   return out.str();
+}
+
+void Summary::AddTimes(const Summary& other) {
+  time_s += other.time_s;
+  preprocessor_time_s += other.preprocessor_time_s;
+  linear_solver_time_s += other.linear_solver_time_s;
+  jacobian_time_s += other.jacobian_time_s;
+  residual_time_s += other.residual_time_s;
 }
 
 OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
@@ -111,7 +120,12 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   s.iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
   s.initial_cost = ceres_summary.initial_cost;
   s.final_cost = ceres_summary.final_cost;
-  s.time_s = ceres_summary.total_time_in_seconds;
+  // Ceres leaves a time at -1 when its stage did not run.
+  s.time_s = std::max(0.0, ceres_summary.total_time_in_seconds);
+  s.preprocessor_time_s = std::max(0.0, ceres_summary.preprocessor_time_in_seconds);
+  s.linear_solver_time_s = std::max(0.0, ceres_summary.linear_solver_time_in_seconds);
+  s.jacobian_time_s = std::max(0.0, ceres_summary.jacobian_evaluation_time_in_seconds);
+  s.residual_time_s = std::max(0.0, ceres_summary.residual_evaluation_time_in_seconds);
   s.residual_blocks = ceres_summary.num_residual_blocks;
   s.parameter_blocks = ceres_summary.num_parameter_blocks;
   // Keep 2D headings wrapped.

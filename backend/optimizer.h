@@ -29,12 +29,21 @@ struct Summary {
   double initial_cost = 0.0;  // Ceres' cost: half the sum of squared residuals
   double final_cost = 0.0;
   double time_s = 0.0;
+  // Where time_s went (Ceres' own breakdown): forming and factoring the
+  // linear systems, evaluating the Jacobians, evaluating the residuals.
+  double preprocessor_time_s = 0.0;  // checks, orderings, the evaluator
+  double linear_solver_time_s = 0.0;
+  double jacobian_time_s = 0.0;
+  double residual_time_s = 0.0;
   int residual_blocks = 0;
   int parameter_blocks = 0;
 
   // Converged, or stopped at the iteration limit with a finite cost.
   bool IsUsable() const;
   std::string BriefReport() const;
+  // Adds `other`'s times (time_s and its breakdown) to these: the time of
+  // several solves reported as one.
+  void AddTimes(const Summary& other);
 };
 
 struct OptimizationResult {

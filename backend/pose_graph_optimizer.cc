@@ -1,6 +1,7 @@
 #include "backend/pose_graph_optimizer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <set>
@@ -158,7 +159,7 @@ Summary SolveGnc(PoseGraph<PoseT>& graph, const PoseGraphOptimizerOptions& optio
       total = s;
     } else {
       total.iterations += s.iterations;
-      total.time_s += s.time_s;
+      total.AddTimes(s);
       total.final_cost = s.final_cost;
       total.termination = s.termination;
       total.message = s.message;
@@ -230,7 +231,13 @@ InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, RelativePos
 template <typename PoseT>
 PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
   const bool switchable = options.method == RobustMethod::kSwitchable;
-  const double gate = Gate<PoseT>(options.cost, options.switch_gate_probability);
+  NoiseScaleEstimate noise_scale;
+  double gate_factor = 1.0;
+  if (options.estimate_noise_scale && options.method != RobustMethod::kNone) {
+    noise_scale = EstimateNoiseScale(graph, options.noise_scale);
+    if (noise_scale.scale >= options.noise_scale_threshold) gate_factor = noise_scale.scale;
+  }
+  const double gate = gate_factor * Gate<PoseT>(options.cost, options.switch_gate_probability);
   const RobustLoss loss = LossFor(options, gate);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
@@ -238,9 +245,12 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   const bool any_robust = options.method != RobustMethod::kNone ||
                           std::any_of(graph.constraints.begin(), graph.constraints.end(),
                                       [](const auto& c) { return c.switch_id.has_value(); });
+  const auto init_start = std::chrono::steady_clock::now();
   const InitialGuess initial_guess = Initialize(
       graph, options.initial_guess, options.cost, any_robust ? gate : std::numeric_limits<double>::infinity(),
       [&](const Constraint<PoseT>& c) { return robust(c) || c.switch_id.has_value(); });
+  const double initial_guess_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - init_start).count();
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
 
   if (switchable) {
@@ -385,6 +395,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   }
   out.summary = summary;
   out.initial_guess = initial_guess;
+  out.initial_guess_time_s = initial_guess_time_s;
+  out.noise_scale = noise_scale;
+  out.gate_factor = gate_factor;
 
   // Refinement: the decisions stand; the poses are re-solved by plain least
   // squares over the odometry and the accepted closures at full weight, so
@@ -401,7 +414,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       if (!d.accepted) rejected.insert(d.id);
     }
     std::optional<OptimizationResult> best;
-    double time_s = 0.0;
+    Summary times;  // of both starts
     using Poses = std::map<PoseId, Vertex<PoseT>>;
     const Poses* starts[] = {&graph.vertices, &initial_poses};
     for (const Poses* start_poses : starts) {
@@ -414,7 +427,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
                                              options.cost);
       }
       OptimizationResult refined = Optimize(refine, start, options.solver);
-      time_s += refined.summary.time_s;
+      times.AddTimes(refined.summary);
       if (refined.summary.IsUsable() &&
           (!best || refined.summary.final_cost < best->summary.final_cost)) {
         best = std::move(refined);
@@ -426,7 +439,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       take_poses(best->values);
       out.refinement = best->summary;
     }
-    out.refinement->time_s = time_s;
+    Summary& r = *out.refinement;
+    r.time_s = r.preprocessor_time_s = r.linear_solver_time_s = r.jacobian_time_s = r.residual_time_s = 0.0;
+    r.AddTimes(times);
   }
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
@@ -482,6 +497,8 @@ void Validate(const PoseGraphOptimizerOptions& o) {
   if (!(o.switch_gate_probability > 0.0 && o.switch_gate_probability < 1.0)) {
     throw std::invalid_argument("switch_gate_probability must be in (0, 1)");
   }
+  if (!(o.noise_scale_threshold > 1.0)) throw std::invalid_argument("noise_scale_threshold must be > 1");
+  Validate(o.noise_scale);
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {
     throw std::invalid_argument("loss_scale_sigma must be >= 0 (0: from the gate)");

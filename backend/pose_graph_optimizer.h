@@ -18,6 +18,7 @@
 
 #include "backend/factors.h"
 #include "backend/graph/pose_graph.h"
+#include "backend/noise_scale.h"
 #include "backend/optimizer.h"
 
 namespace catgraph {
@@ -70,6 +71,17 @@ struct PoseGraphOptimizerOptions {
   // Vertigo's fixed xi = 1 instead rejects a true closure whenever its error
   // exceeds one sigma overall (173 of 895 on Vertigo's Intel).
   double switch_gate_probability = 0.999;  // (0, 1)
+  // The gate assumes the information is right (or conservative). When short
+  // cycles of the graph show its noise to be at least
+  // `noise_scale_threshold` times the variance its information states
+  // (EstimateNoiseScale, noise_scale.h), every gate-derived default (the
+  // switch prior, DCS's Phi, the loss scales, GNC's threshold, kAuto's
+  // truncation) is widened by the factor measured. A graph whose
+  // information is right or conservative is unaffected; SE-Sync's
+  // sphere_bignoise_vertex3 states about a 19th of its noise. Off: false.
+  bool estimate_noise_scale = true;
+  double noise_scale_threshold = 3.0;  // > 1
+  NoiseScaleOptions noise_scale;
   // Xi^-1 given explicitly (> 0) overrides the gate; 0 = use the gate.
   double switch_prior_information = 0.0;
   // DCS: Phi, the chi2 beyond which a closure is down-weighted; > 0, or 0
@@ -130,6 +142,14 @@ struct PoseGraphOptimization {
   AnyPoseGraph graph;
   // The initial guess used: kAuto's choice, or the one asked for.
   InitialGuess initial_guess = InitialGuess::kFile;
+  // Seconds spent on the initial guess (kAuto: both guesses and their costs);
+  // not part of TotalTimeS().
+  double initial_guess_time_s = 0.0;
+  // The noise scale measured (PoseGraphOptimizerOptions::estimate_noise_scale)
+  // and the factor the gate was widened by: the scale, or 1 below the
+  // threshold, without an estimate, or when not asked for.
+  NoiseScaleEstimate noise_scale;
+  double gate_factor = 1.0;
   Summary summary;  // the robust solve
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.

@@ -9,10 +9,12 @@
 #include <sstream>
 #include <numbers>
 #include <random>
+#include <set>
 #include <string>
 
 #include "backend/graph/pose2.h"
 #include "backend/graph/pose3.h"
+#include "backend/pose_graph_optimizer.h"
 
 namespace catgraph::testing {
 
@@ -38,6 +40,28 @@ inline bool ApproxEqual(const Pose2& a, const Pose2& b, double tol = 1e-9) {
 inline bool ApproxEqual(const Pose3& a, const Pose3& b, double tol = 1e-9) {
   return (a.translation() - b.translation()).norm() <= tol &&
          RotationAngle(a.rotation().conjugate() * b.rotation()) <= tol;
+}
+
+// How an optimisation decided on the injected false closures and on the
+// true ones (every other loop closure).
+struct InjectedDecisions {
+  std::size_t false_accepted = 0;
+  std::size_t true_rejected = 0;
+  std::size_t true_closures = 0;
+};
+
+inline InjectedDecisions CountInjected(const PoseGraphOptimization& result,
+                                       const std::set<ClosureId>& injected) {
+  InjectedDecisions counts;
+  for (const ClosureDecision& d : result.closures) {
+    if (injected.contains(d.id)) {
+      counts.false_accepted += d.accepted;
+    } else {
+      counts.true_rejected += !d.accepted;
+      ++counts.true_closures;
+    }
+  }
+  return counts;
 }
 
 inline std::filesystem::path Fixture(const std::string& name) {

@@ -127,6 +127,16 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
     CHECK(j.contains(key));
   }
   CHECK(j.at("final_cost").get<double>() < j.at("initial_cost").get<double>());
+  // The time's breakdown: parts of time_s (robust solve and refinement).
+  double parts = 0.0;
+  for (const char* key : {"preprocessor_time_s", "linear_solver_time_s", "jacobian_time_s",
+                          "residual_time_s"}) {
+    CHECK(j.at(key).get<double>() >= 0.0);
+    parts += j.at(key).get<double>();
+  }
+  CHECK(parts <= j.at("time_s").get<double>());
+  CHECK(j.at("linear_solver_time_s").get<double>() > 0.0);
+  CHECK(j.at("initial_guess_time_s").get<double>() > 0.0);
   const auto info = nlohmann::json::parse(Run({"info", out, "--json"}).out);
   // One switch per loop closure, written with the graph.
   CHECK(info.at("switches") == info.at("loop_closures"));
