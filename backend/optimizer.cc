@@ -40,12 +40,20 @@ std::string Summary::BriefReport() const {
   return out.str();
 }
 
+namespace {
+
+constexpr double Summary::*kTimes[] = {&Summary::time_s, &Summary::preprocessor_time_s,
+                                       &Summary::linear_solver_time_s, &Summary::jacobian_time_s,
+                                       &Summary::residual_time_s};
+
+}  // namespace
+
 void Summary::AddTimes(const Summary& other) {
-  time_s += other.time_s;
-  preprocessor_time_s += other.preprocessor_time_s;
-  linear_solver_time_s += other.linear_solver_time_s;
-  jacobian_time_s += other.jacobian_time_s;
-  residual_time_s += other.residual_time_s;
+  for (const auto field : kTimes) this->*field += other.*field;
+}
+
+void Summary::SetTimes(const Summary& other) {
+  for (const auto field : kTimes) this->*field = other.*field;
 }
 
 OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,

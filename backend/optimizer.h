@@ -44,6 +44,8 @@ struct Summary {
   // Adds `other`'s times (time_s and its breakdown) to these: the time of
   // several solves reported as one.
   void AddTimes(const Summary& other);
+  // Sets these times to `other`'s.
+  void SetTimes(const Summary& other);
 };
 
 struct OptimizationResult {

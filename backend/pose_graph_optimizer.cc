@@ -439,9 +439,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       take_poses(best->values);
       out.refinement = best->summary;
     }
-    Summary& r = *out.refinement;
-    r.time_s = r.preprocessor_time_s = r.linear_solver_time_s = r.jacobian_time_s = r.residual_time_s = 0.0;
-    r.AddTimes(times);
+    out.refinement->SetTimes(times);
   }
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
