@@ -47,8 +47,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["refine_iterations"] = r.refinement ? r.refinement->iterations : 0;
   j["refine_time_s"] = r.refinement ? r.refinement->time_s : 0.0;
   // Where time_s went, and the initial guess's time, which it excludes.
-  Summary solves = r.summary;
-  if (r.refinement) solves.AddTimes(*r.refinement);
+  const Summary solves = r.SolveTimes();
   j["preprocessor_time_s"] = solves.preprocessor_time_s;
   j["linear_solver_time_s"] = solves.linear_solver_time_s;
   j["jacobian_time_s"] = solves.jacobian_time_s;

@@ -154,8 +154,15 @@ struct PoseGraphOptimization {
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.
   std::optional<Summary> refinement;
-  // Seconds of the robust solve and the refinement together.
-  double TotalTimeS() const { return summary.time_s + (refinement ? refinement->time_s : 0.0); }
+  // The times (Summary::time_s and its breakdown) of the robust solve and
+  // the refinement together; TotalTimeS() is their time_s.
+  Summary SolveTimes() const {
+    Summary times;
+    times.AddTimes(summary);
+    if (refinement) times.AddTimes(*refinement);
+    return times;
+  }
+  double TotalTimeS() const { return SolveTimes().time_s; }
   std::vector<ClosureDecision> closures;  // every loop closure, in graph order
   std::size_t accepted = 0;
   std::size_t rejected = 0;

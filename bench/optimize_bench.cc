@@ -22,8 +22,7 @@ void SetCounters(benchmark::State& state, const PoseGraphOptimization& result) {
   state.counters["rejected"] = static_cast<double>(result.rejected);
   state.counters["usable"] = result.summary.IsUsable();
   state.counters["refine_s"] = result.refinement ? result.refinement->time_s : 0.0;
-  Summary solves = result.summary;
-  if (result.refinement) solves.AddTimes(*result.refinement);
+  const Summary solves = result.SolveTimes();
   state.counters["init_s"] = result.initial_guess_time_s;
   state.counters["linear_s"] = solves.linear_solver_time_s;
   state.counters["jacobian_s"] = solves.jacobian_time_s;
