@@ -56,6 +56,13 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["noise_scale"] = r.noise_scale.scale;
   j["noise_scale_cycles"] = r.noise_scale.cycles;
   j["gate_factor"] = r.gate_factor;
+  j["inlier_noise_scale"] = r.inlier_noise_scale.scale;
+  j["inlier_noise_upper_scale"] = r.inlier_noise_scale.upper_scale;
+  j["inlier_noise_cycles"] = r.inlier_noise_scale.cycles;
+  j["narrow_factor"] = r.narrow_factor;
+  j["narrowed"] = r.narrow_factor < 1.0;  // ran and succeeded
+  j["narrow_iterations"] = r.narrowed ? r.narrowed->iterations : 0;
+  j["narrow_time_s"] = r.narrowed ? r.narrowed->time_s : 0.0;
   j["accepted"] = r.accepted;
   j["rejected"] = r.rejected;
   if (with_closures) {
@@ -102,7 +109,14 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
   }
   out << "optimised " << options.input << " with " << options.method << " from the "
       << ToString(result.initial_guess) << " initial guess (" << result.initial_guess_time_s
-      << " s): " << result.summary.BriefReport() << '\n'
+      << " s): " << result.summary.BriefReport() << '\n';
+  if (result.narrow_factor < 1.0) {
+    out << "the accepted closures' short cycles show Gaussian noise " << result.inlier_noise_scale.upper_scale
+        << " times what their information states (" << result.inlier_noise_scale.cycles
+        << " cycles): decided again at a gate " << result.narrow_factor
+        << " times the first (--no-narrow-gate to keep it): " << result.narrowed->BriefReport() << '\n';
+  }
+  out
       << (result.refinement ? "refined without the rejected closures: " +
                                    result.refinement->BriefReport() + "\n"
                              : std::string())
@@ -152,6 +166,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--no-noise-scale{false}", o->optimizer.estimate_noise_scale,
                 "Keep the gate where the file's information puts it, even when short cycles "
                 "of the graph show its noise to be three times or more what that information states");
+  cmd->add_flag("--no-narrow-gate{false}", o->optimizer.narrow_gate,
+                "Keep the first robust solve's decisions, even when the accepted closures' "
+                "short cycles show Gaussian noise far below what their information states");
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
                   "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "
                   "(Vertigo uses 1); 0 = use the gate")

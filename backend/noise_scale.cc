@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
@@ -19,7 +20,8 @@
 namespace catgraph {
 
 void Validate(const NoiseScaleOptions& o) {
-  if (o.window < 1 || o.max_cycles < 1 || o.min_cycles < 1 || !(o.quantile > 0.0 && o.quantile < 1.0)) {
+  if (o.window < 1 || o.max_cycles < 1 || o.min_cycles < 1 || !(o.quantile > 0.0 && o.quantile < 1.0) ||
+      !(o.upper_quantile > o.quantile && o.upper_quantile < 1.0)) {
     throw std::invalid_argument("NoiseScaleOptions: a field is out of range");
   }
 }
@@ -29,11 +31,12 @@ namespace {
 template <typename PoseT>
 class CycleFinder {
  public:
-  CycleFinder(const PoseGraph<PoseT>& graph, int window) : window_(window) {
+  CycleFinder(const PoseGraph<PoseT>& graph, int window, const std::set<ClosureId>& excluded)
+      : window_(window) {
     for (const auto& c : graph.constraints) {
       if (c.kind == ClosureKind::kOdometry && c.IsBetweenConsecutivePoses()) {
         odometry_.emplace(std::min(c.from.value(), c.to.value()), &c);
-      } else if (c.from != c.to) {
+      } else if (c.from != c.to && !excluded.contains(c.id)) {
         const std::int64_t lo = std::min(c.from.value(), c.to.value());
         const std::int64_t hi = std::max(c.from.value(), c.to.value());
         by_low_end_[lo].push_back({hi, &c});
@@ -130,9 +133,10 @@ class CycleFinder {
 };
 
 template <typename PoseT>
-NoiseScaleEstimate Estimate(const PoseGraph<PoseT>& graph, const NoiseScaleOptions& options) {
+NoiseScaleEstimate Estimate(const PoseGraph<PoseT>& graph, const NoiseScaleOptions& options,
+                            const std::set<ClosureId>& excluded) {
   Validate(options);
-  const CycleFinder<PoseT> finder(graph, options.window);
+  const CycleFinder<PoseT> finder(graph, options.window, excluded);
   std::vector<typename CycleFinder<PoseT>::Cycle> cycles;
   for (std::size_t k = 0; k < finder.num_closures(); ++k) {
     if (auto cycle = finder.CycleOf(k)) cycles.push_back(*cycle);
@@ -146,20 +150,26 @@ NoiseScaleEstimate Estimate(const PoseGraph<PoseT>& graph, const NoiseScaleOptio
   NoiseScaleEstimate estimate;
   estimate.cycles = static_cast<int>(chi2.size());
   if (estimate.cycles < options.min_cycles) return estimate;
-  const auto q = chi2.begin() + static_cast<std::ptrdiff_t>(options.quantile * (chi2.size() - 1));
-  std::nth_element(chi2.begin(), q, chi2.end());
   constexpr int kDof = std::is_same_v<PoseT, Pose2> ? 3 : 6;
-  estimate.scale = *q / ChiSquareQuantile(kDof, options.quantile);
+  auto scale_at = [&chi2](double quantile) {
+    const auto q = chi2.begin() + static_cast<std::ptrdiff_t>(quantile * (chi2.size() - 1));
+    std::nth_element(chi2.begin(), q, chi2.end());
+    return *q / ChiSquareQuantile(kDof, quantile);
+  };
+  estimate.scale = scale_at(options.quantile);
+  estimate.upper_scale = scale_at(options.upper_quantile);
   return estimate;
 }
 
 }  // namespace
 
-NoiseScaleEstimate EstimateNoiseScale(const PoseGraph2& graph, const NoiseScaleOptions& options) {
-  return Estimate(graph, options);
+NoiseScaleEstimate EstimateNoiseScale(const PoseGraph2& graph, const NoiseScaleOptions& options,
+                                      const std::set<ClosureId>& excluded) {
+  return Estimate(graph, options, excluded);
 }
-NoiseScaleEstimate EstimateNoiseScale(const PoseGraph3& graph, const NoiseScaleOptions& options) {
-  return Estimate(graph, options);
+NoiseScaleEstimate EstimateNoiseScale(const PoseGraph3& graph, const NoiseScaleOptions& options,
+                                      const std::set<ClosureId>& excluded) {
+  return Estimate(graph, options, excluded);
 }
 
 }  // namespace catgraph

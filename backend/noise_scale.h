@@ -11,6 +11,8 @@
 #ifndef CATGRAPH_BACKEND_NOISE_SCALE_H_
 #define CATGRAPH_BACKEND_NOISE_SCALE_H_
 
+#include <set>
+
 #include "backend/graph/pose_graph.h"
 
 namespace catgraph {
@@ -27,6 +29,10 @@ struct NoiseScaleOptions {
   // so that up to three quarters of the cycles may hold a false closure;
   // (0, 1).
   double quantile = 0.25;
+  // A second, higher quantile: with `quantile`'s, the shape of the cycles'
+  // distribution (both scales agree when the noise is Gaussian with one
+  // variance); (quantile, 1).
+  double upper_quantile = 0.9;
 };
 
 // Throws std::invalid_argument when a field is out of range.
@@ -37,6 +43,10 @@ struct NoiseScaleEstimate {
   // information is right, below 1 when it is conservative, k when the
   // noise's variance is k times what it states. 1 without an estimate.
   double scale = 1.0;
+  // The same ratio at the upper quantile: about `scale` for Gaussian noise,
+  // larger when the noise has heavier tails (or false closures). 1 without
+  // an estimate.
+  double upper_scale = 1.0;
   int cycles = 0;  // cycles solved
 };
 
@@ -45,9 +55,12 @@ struct NoiseScaleEstimate {
 // a..a' and b..b' (consecutive ids, kind odometry). Each cycle's chi2 is that
 // of the plain least-squares solution of its own small graph (g2o's cost,
 // a fixed), which for true measurements with right information follows
-// chi2(3) in 2D and chi2(6) in 3D. Deterministic. Validates `options`.
-NoiseScaleEstimate EstimateNoiseScale(const PoseGraph2& graph, const NoiseScaleOptions& options = {});
-NoiseScaleEstimate EstimateNoiseScale(const PoseGraph3& graph, const NoiseScaleOptions& options = {});
+// chi2(3) in 2D and chi2(6) in 3D. Closures in `excluded` (a robust solve's
+// rejected ones) belong to no cycle. Deterministic. Validates `options`.
+NoiseScaleEstimate EstimateNoiseScale(const PoseGraph2& graph, const NoiseScaleOptions& options = {},
+                                      const std::set<ClosureId>& excluded = {});
+NoiseScaleEstimate EstimateNoiseScale(const PoseGraph3& graph, const NoiseScaleOptions& options = {},
+                                      const std::set<ClosureId>& excluded = {});
 
 }  // namespace catgraph
 

@@ -86,6 +86,22 @@ double Gate(RelativePoseCostType cost, double probability) {
   return ChiSquareQuantile(PoseT::kTangentDim, probability);
 }
 
+// Whether the gate may be narrowed (PoseGraphOptimizerOptions::narrow_gate):
+// asked for, and the method decides at the gate, with no explicit parameter
+// in its place.
+bool NarrowsGate(const PoseGraphOptimizerOptions& o) {
+  if (!o.estimate_noise_scale || !o.narrow_gate) return false;
+  switch (o.method) {
+    case RobustMethod::kNone: return false;
+    case RobustMethod::kSwitchable: return o.switch_prior_information == 0.0;
+    case RobustMethod::kDcs: return o.dcs_phi == 0.0;
+    case RobustMethod::kCauchy:
+    case RobustMethod::kHuber: return o.loss_scale_sigma == 0.0;
+    case RobustMethod::kGnc: return true;
+  }
+  return false;
+}
+
 // The loss of a method. Unset parameters (0) are set from the chi2 gate g so
 // that a closure's weight drops below 0.5 exactly when its chi2 exceeds g, as
 // for a switch: DCS's scale 2 Phi / (Phi + chi2) < 1/2 iff chi2 > 3 Phi;
@@ -238,7 +254,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     if (noise_scale.scale >= options.noise_scale_threshold) gate_factor = noise_scale.scale;
   }
   const double gate = gate_factor * Gate<PoseT>(options.cost, options.switch_gate_probability);
-  const RobustLoss loss = LossFor(options, gate);
+  RobustLoss loss = LossFor(options, gate);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
   };
@@ -253,15 +269,27 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       std::chrono::duration<double>(std::chrono::steady_clock::now() - init_start).count();
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
 
+  // Closures the method decides (the rest carry the file's switches).
+  const bool method_decides_any = std::any_of(graph.constraints.begin(), graph.constraints.end(),
+                                              [&](const auto& c) { return robust(c) && !c.switch_id; });
+  std::set<SwitchId> added_switches;  // the method's, as opposed to the file's
   if (switchable) {
     const double switch_information =
         options.switch_prior_information > 0.0 ? options.switch_prior_information : gate;
+    const auto file_switches = graph.switches;
     graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
+    for (const auto& [id, s] : graph.switches) {
+      if (!file_switches.contains(id)) added_switches.insert(id);
+    }
   }
 
-  // Closure -> switch, for the coupled switches; the disabled closures' switches.
+  // Closure -> switch, for the coupled switches; the disabled closures'
+  // switches. Closures held off are left out of a solve: the disabled ones,
+  // and in the narrowed solve the ones the first rejected, whose switches
+  // are then held at their values (`frozen_switches`).
   std::map<ClosureId, SwitchId> switch_of;
-  std::set<SwitchId> disabled_switches;
+  std::set<SwitchId> disabled_switches, frozen_switches;
+  std::set<ClosureId> held_off = options.disabled_closures;
   std::size_t disabled_found = 0;
   for (const auto& c : graph.constraints) {
     const bool disabled = options.disabled_closures.contains(c.id);
@@ -324,10 +352,14 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     for (const auto& [id, s] : graph.switches) {
       if (disabled_switches.contains(id)) continue;
       initial.Insert(id, s.value);
-      if (s.prior) factors.Emplace<SwitchPriorFactor>(id, *s.prior);
+      if (frozen_switches.contains(id)) {
+        factors.SetConstant(SwitchKey(id));  // a coupled closure may still read it
+      } else if (s.prior) {
+        factors.Emplace<SwitchPriorFactor>(id, *s.prior);
+      }
     }
     for (const auto& c : graph.constraints) {
-      if (options.disabled_closures.contains(c.id)) continue;
+      if (held_off.contains(c.id)) continue;
       if (c.switch_id) {
         const auto coupled = coupled_switches.find(c.id);
         factors.Emplace<SwitchableBetweenFactor<PoseT>>(
@@ -348,25 +380,27 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     OptimizationResult solved = Optimize(factors, initial, solver);
     take_poses(solved.values);
     for (auto& [id, s] : graph.switches) {
-      if (!disabled_switches.contains(id)) s.value = solved.values.AtSwitch(id);
+      if (!disabled_switches.contains(id) && !frozen_switches.contains(id)) {
+        s.value = solved.values.AtSwitch(id);
+      }
     }
     return solved.summary;
   };
 
+  // The robust solve at the gate g, over the closures not held off.
   std::map<ClosureId, double> gnc_weights;
-  Summary summary;
-  if (options.method == RobustMethod::kGnc) {
+  auto solve_robustly = [&](double g) {
+    loss = LossFor(options, g);
+    if (options.method != RobustMethod::kGnc) return solve(nullptr, options.solver.max_iterations);
+    gnc_weights.clear();
     for (const auto& c : graph.constraints) {
-      if (!c.switch_id && robust(c) && !options.disabled_closures.contains(c.id)) gnc_weights[c.id] = 1.0;
+      if (!c.switch_id && robust(c) && !held_off.contains(c.id)) gnc_weights[c.id] = 1.0;
     }
-    summary = SolveGnc(graph, options, gate, gnc_weights, solve);
-  } else {
-    summary = solve(nullptr, options.solver.max_iterations);
-  }
+    return SolveGnc(graph, options, g, gnc_weights, solve);
+  };
 
-  PoseGraphOptimization out;
-  for (const auto& c : graph.constraints) {
-    if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
+  // What the last solve decided about loop closure c.
+  auto decide_one = [&](const Constraint<PoseT>& c) {
     ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, 1.0, true};
     bool coupled_on = true;  // every coupled switch above 0.5
     double own = 1.0;        // the closure's own switch or loss weight
@@ -390,10 +424,72 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     if (!c.switch_id) own = d.weight;
     d.own_weight = own;
     d.accepted = own > 0.5 && coupled_on;
-    (d.accepted ? out.accepted : out.rejected) += 1;
-    out.closures.push_back(d);
+    return d;
+  };
+  // ... about every loop closure, in graph order; where `kept` (the first
+  // solve's decisions) rejected one, that decision.
+  auto decide_all = [&](const std::vector<ClosureDecision>* kept) {
+    std::vector<ClosureDecision> decisions;
+    for (const auto& c : graph.constraints) {
+      if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
+      if (kept && !(*kept)[decisions.size()].accepted) {
+        decisions.push_back((*kept)[decisions.size()]);
+        continue;
+      }
+      decisions.push_back(decide_one(c));
+    }
+    return decisions;
+  };
+
+  PoseGraphOptimization out;
+  out.summary = solve_robustly(gate);
+  out.closures = decide_all(nullptr);
+
+  // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the accepted
+  // closures' own cycles measure the noise again; when it is Gaussian and
+  // the information overstates it, they are decided again at the calibrated
+  // family-wise gate, from the first solve's poses, the rejected ones held
+  // off as they are.
+  if (NarrowsGate(options) && method_decides_any && out.summary.IsUsable()) {
+    std::set<ClosureId> rejected;
+    for (const ClosureDecision& d : out.closures) {
+      if (!d.accepted) rejected.insert(d.id);
+    }
+    const std::size_t tested = out.closures.size() - rejected.size();
+    out.inlier_noise_scale = EstimateNoiseScale(graph, options.noise_scale, rejected);
+    const NoiseScaleEstimate& inliers = out.inlier_noise_scale;
+    const double narrowed =
+        tested == 0 ? gate
+                    : inliers.upper_scale *
+                          Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
+                                                              static_cast<double>(tested));
+    if (inliers.cycles >= options.narrow_min_cycles &&
+        inliers.upper_scale <= options.narrow_max_tail_ratio * inliers.scale &&
+        narrowed * options.noise_scale_threshold <= gate) {
+      const auto first_vertices = graph.vertices;
+      const auto first_switches = graph.switches;
+      for (const ClosureId id : rejected) {
+        held_off.insert(id);
+        if (const auto s = switch_of.find(id); s != switch_of.end()) frozen_switches.insert(s->second);
+      }
+      for (const SwitchId id : added_switches) {
+        if (frozen_switches.contains(id) || disabled_switches.contains(id)) continue;
+        SwitchVariable& s = graph.switches.at(id);
+        s.value = 1.0;
+        s.prior->information = narrowed;
+      }
+      out.narrowed = solve_robustly(narrowed);
+      if (out.narrowed->IsUsable()) {
+        out.narrow_factor = narrowed / gate;
+        const std::vector<ClosureDecision> first = std::move(out.closures);
+        out.closures = decide_all(&first);
+      } else {
+        graph.vertices = first_vertices;  // the first solve's result stands
+        graph.switches = first_switches;
+      }
+    }
   }
-  out.summary = summary;
+  for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
   out.initial_guess = initial_guess;
   out.initial_guess_time_s = initial_guess_time_s;
   out.noise_scale = noise_scale;
@@ -496,6 +592,8 @@ void Validate(const PoseGraphOptimizerOptions& o) {
     throw std::invalid_argument("switch_gate_probability must be in (0, 1)");
   }
   if (!(o.noise_scale_threshold > 1.0)) throw std::invalid_argument("noise_scale_threshold must be > 1");
+  if (!(o.narrow_max_tail_ratio >= 1.0)) throw std::invalid_argument("narrow_max_tail_ratio must be >= 1");
+  if (o.narrow_min_cycles < 1) throw std::invalid_argument("narrow_min_cycles must be >= 1");
   Validate(o.noise_scale);
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {

@@ -82,6 +82,25 @@ struct PoseGraphOptimizerOptions {
   bool estimate_noise_scale = true;
   double noise_scale_threshold = 3.0;  // > 1
   NoiseScaleOptions noise_scale;
+  // The other way: a file whose information overstates its noise (Vertigo's
+  // Manhattan, about 45 times) lets false closures near the truth pass the
+  // gate. After the robust solve the short cycles of the accepted closures
+  // alone measure the noise again (the rejected ones belong to no cycle).
+  // When at least `narrow_min_cycles` of them show Gaussian noise of one
+  // variance (the scale at NoiseScaleOptions' upper quantile at most
+  // `narrow_max_tail_ratio` times the scale at its lower one; real front
+  // ends' heavier tails measure 1.8 and more) and the calibrated gate below is
+  // at most the gate over `noise_scale_threshold`, the accepted closures are
+  // decided again, from the solve's poses, with the rejected ones held off as
+  // they are. The calibrated gate is the upper scale times the quantile at
+  // 1 - (1 - switch_gate_probability) / n for the n closures tested: in the
+  // noise's own units, and family-wise, so that with probability
+  // switch_gate_probability no true closure among them is rejected. Needs
+  // `estimate_noise_scale` and a method deciding at the gate (no explicit
+  // switch prior, Phi or loss scale).
+  bool narrow_gate = true;
+  double narrow_max_tail_ratio = 1.25;  // >= 1
+  int narrow_min_cycles = 100;          // >= 1
   // Xi^-1 given explicitly (> 0) overrides the gate; 0 = use the gate.
   double switch_prior_information = 0.0;
   // DCS: Phi, the chi2 beyond which a closure is down-weighted; > 0, or 0
@@ -151,14 +170,23 @@ struct PoseGraphOptimization {
   NoiseScaleEstimate noise_scale;
   double gate_factor = 1.0;
   Summary summary;  // the robust solve
+  // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the noise measured on
+  // the accepted closures' cycles (cycles 0 when not measured), the
+  // calibrated gate over the first (1 when it did not run or failed), and
+  // the second robust solve, when it ran. When it succeeded its decisions
+  // are `closures`; when it failed, the first solve's result stands.
+  NoiseScaleEstimate inlier_noise_scale;
+  double narrow_factor = 1.0;
+  std::optional<Summary> narrowed;
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.
   std::optional<Summary> refinement;
-  // The times (Summary::time_s and its breakdown) of the robust solve and
+  // The times (Summary::time_s and its breakdown) of the robust solves and
   // the refinement together; TotalTimeS() is their time_s.
   Summary SolveTimes() const {
     Summary times;
     times.AddTimes(summary);
+    if (narrowed) times.AddTimes(*narrowed);
     if (refinement) times.AddTimes(*refinement);
     return times;
   }

@@ -137,6 +137,14 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   CHECK(parts <= j.at("time_s").get<double>());
   CHECK(j.at("linear_solver_time_s").get<double>() > 0.0);
   CHECK(j.at("initial_guess_time_s").get<double>() > 0.0);
+  // The narrowed gate's keys; a simulated graph's information is its noise's,
+  // so nothing narrows.
+  for (const char* key : {"inlier_noise_scale", "inlier_noise_upper_scale", "inlier_noise_cycles",
+                          "narrow_iterations", "narrow_time_s"}) {
+    CHECK(j.contains(key));
+  }
+  CHECK(j.at("narrowed") == false);
+  CHECK(j.at("narrow_factor") == 1.0);
   const auto info = nlohmann::json::parse(Run({"info", out, "--json"}).out);
   // One switch per loop closure, written with the graph.
   CHECK(info.at("switches") == info.at("loop_closures"));
