@@ -60,7 +60,8 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["inlier_noise_upper_scale"] = r.inlier_noise_scale.upper_scale;
   j["inlier_noise_cycles"] = r.inlier_noise_scale.cycles;
   j["narrow_factor"] = r.narrow_factor;
-  j["narrowed"] = r.narrow_factor < 1.0;  // ran and succeeded
+  j["narrowed"] = r.narrow_factor < 1.0;  // ran, and its result was kept
+  j["narrow_newly_rejected"] = r.narrow_newly_rejected;
   j["narrow_iterations"] = r.narrowed ? r.narrowed->iterations : 0;
   j["narrow_time_s"] = r.narrowed ? r.narrowed->time_s : 0.0;
   j["accepted"] = r.accepted;

@@ -479,10 +479,17 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
         s.prior->information = narrowed;
       }
       out.narrowed = solve_robustly(narrowed);
+      std::vector<ClosureDecision> second;
       if (out.narrowed->IsUsable()) {
+        second = decide_all(&out.closures);
+        for (const ClosureDecision& d : second) out.narrow_newly_rejected += d.accepted ? 0 : 1;
+        out.narrow_newly_rejected -= rejected.size();
+      }
+      if (out.narrowed->IsUsable() &&
+          static_cast<double>(out.narrow_newly_rejected) <=
+              options.narrow_max_rejected_share * static_cast<double>(tested)) {
         out.narrow_factor = narrowed / gate;
-        const std::vector<ClosureDecision> first = std::move(out.closures);
-        out.closures = decide_all(&first);
+        out.closures = std::move(second);
       } else {
         graph.vertices = first_vertices;  // the first solve's result stands
         graph.switches = first_switches;
@@ -594,6 +601,9 @@ void Validate(const PoseGraphOptimizerOptions& o) {
   if (!(o.noise_scale_threshold > 1.0)) throw std::invalid_argument("noise_scale_threshold must be > 1");
   if (!(o.narrow_max_tail_ratio >= 1.0)) throw std::invalid_argument("narrow_max_tail_ratio must be >= 1");
   if (o.narrow_min_cycles < 1) throw std::invalid_argument("narrow_min_cycles must be >= 1");
+  if (!(o.narrow_max_rejected_share > 0.0 && o.narrow_max_rejected_share <= 1.0)) {
+    throw std::invalid_argument("narrow_max_rejected_share must be in (0, 1]");
+  }
   Validate(o.noise_scale);
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {

@@ -98,9 +98,16 @@ struct PoseGraphOptimizerOptions {
   // switch_gate_probability no true closure among them is rejected. Needs
   // `estimate_noise_scale` and a method deciding at the gate (no explicit
   // switch prior, Phi or loss scale).
+  // The second solve starts from the first one's map, which the false
+  // closures it accepted have bent; when they bent it far, the tight gate
+  // switches off true closures before the map can unbend. So when it
+  // rejects more than `narrow_max_rejected_share` of the closures the first
+  // accepted (the calibrated gate expects none of them but the false ones),
+  // the first solve's result stands.
   bool narrow_gate = true;
-  double narrow_max_tail_ratio = 1.25;  // >= 1
-  int narrow_min_cycles = 100;          // >= 1
+  double narrow_max_tail_ratio = 1.25;     // >= 1
+  int narrow_min_cycles = 100;             // >= 1
+  double narrow_max_rejected_share = 0.1;  // (0, 1]
   // Xi^-1 given explicitly (> 0) overrides the gate; 0 = use the gate.
   double switch_prior_information = 0.0;
   // DCS: Phi, the chi2 beyond which a closure is down-weighted; > 0, or 0
@@ -172,12 +179,15 @@ struct PoseGraphOptimization {
   Summary summary;  // the robust solve
   // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the noise measured on
   // the accepted closures' cycles (cycles 0 when not measured), the
-  // calibrated gate over the first (1 when it did not run or failed), and
-  // the second robust solve, when it ran. When it succeeded its decisions
-  // are `closures`; when it failed, the first solve's result stands.
+  // calibrated gate over the first (1 when it did not run or its result was
+  // not kept), the second robust solve, when it ran, and how many closures
+  // the first accepted it rejected. When it succeeded and rejected at most
+  // narrow_max_rejected_share of them, its decisions are `closures`;
+  // otherwise the first solve's result stands.
   NoiseScaleEstimate inlier_noise_scale;
   double narrow_factor = 1.0;
   std::optional<Summary> narrowed;
+  std::size_t narrow_newly_rejected = 0;
   // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
   // If it failed, `graph` holds the robust solve's poses.
   std::optional<Summary> refinement;

@@ -140,7 +140,7 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   // The narrowed gate's keys; a simulated graph's information is its noise's,
   // so nothing narrows.
   for (const char* key : {"inlier_noise_scale", "inlier_noise_upper_scale", "inlier_noise_cycles",
-                          "narrow_iterations", "narrow_time_s"}) {
+                          "narrow_newly_rejected", "narrow_iterations", "narrow_time_s"}) {
     CHECK(j.contains(key));
   }
   CHECK(j.at("narrowed") == false);
