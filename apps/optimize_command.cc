@@ -117,10 +117,9 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
         << " cycles): decided again at a gate " << result.narrow_factor
         << " times the first (--no-narrow-gate to keep it): " << result.narrowed->BriefReport() << '\n';
   }
-  out
-      << (result.refinement ? "refined without the rejected closures: " +
-                                   result.refinement->BriefReport() + "\n"
-                             : std::string())
+  out << (result.refinement ? "refined without the rejected closures: " +
+                                  result.refinement->BriefReport() + "\n"
+                            : std::string())
       << "chi2 " << result.chi2 << ", chordal cost " << result.chordal_cost << "; loop closures: " << result.accepted << " accepted, "
       << result.rejected << " rejected\n"
       << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "")
