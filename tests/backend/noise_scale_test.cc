@@ -119,7 +119,7 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
           "gate, and false closures near the truth are rejected with every true one kept",
           "[backend][noise-scale][switchable]") {
   ManhattanWorldOptions world;
-  world.num_poses = 2000;
+  world.num_poses = 1500;
   world.seed = 3;
   const SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
   // The information states 100 times the noise's variance (Vertigo's
@@ -154,7 +154,7 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
         Approx(r.inlier_noise_scale.upper_scale * ChiSquareQuantile(3, 1.0 - 0.001 / tested)));
   const testing::InjectedDecisions after = testing::CountInjected(r, injected);
   CAPTURE(before.false_accepted, before.true_rejected, after.false_accepted, after.true_rejected);
-  CHECK(before.false_accepted >= 10);  // 19 measured
+  CHECK(before.false_accepted >= 10);  // 17 measured
   CHECK(after.false_accepted == 0);
   CHECK(after.true_rejected == 0);
   // What the first solve rejected stays rejected; the second rejected the
