@@ -1,5 +1,6 @@
 #include <set>
 #include <stdexcept>
+#include <cstdint>
 #include <map>
 #include <random>
 #include <vector>
@@ -25,6 +26,33 @@ namespace {
 PoseGraph2 InformationTimes(PoseGraph2 graph, double factor) {
   for (auto& c : graph.constraints) c.measurement.information *= factor;
   return graph;
+}
+
+// A simulated world whose information states 100 times the noise's variance
+// (Vertigo's Manhattan: about 45 times), spoiled by `count` false closures
+// in local groups of 10. The false closures copy that information, so the
+// gate in it lets in those whose pairs lie within about 2.8 m.
+struct OverstatedWorld {
+  PoseGraph2 right;  // the world with its information right, no false closures
+  PoseGraph2 graph;
+  std::vector<InjectedClosure> injected;
+};
+
+OverstatedWorld SimulateOverstatedWorld(int num_poses, std::uint64_t world_seed, int count,
+                                        std::uint64_t outlier_seed) {
+  ManhattanWorldOptions world;
+  world.num_poses = num_poses;
+  world.seed = world_seed;
+  OverstatedWorld out;
+  out.right = SimulateManhattanWorld(world).graph;
+  out.graph = InformationTimes(out.right, 0.01);
+  OutlierOptions outliers;
+  outliers.count = count;
+  outliers.policy = OutlierPolicy::kLocalGrouped;
+  outliers.group_size = 10;
+  outliers.seed = outlier_seed;
+  out.injected = InjectOutliers(out.graph, outliers);
+  return out;
 }
 
 TEST_CASE("short cycles measure how far the information understates the noise",
@@ -118,21 +146,10 @@ TEST_CASE("the gate widens by the measured noise scale on overconfident informat
 TEST_CASE("information that overstates Gaussian noise: the accepted closures' cycles narrow the "
           "gate, and false closures near the truth are rejected with every true one kept",
           "[backend][noise-scale][switchable]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 1500;
-  world.seed = 3;
-  const SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  // The information states 100 times the noise's variance (Vertigo's
-  // Manhattan: about 45 times). The false closures copy it, so the gate in
-  // that information lets in those whose pairs lie within about 2.8 m.
-  PoseGraph2 graph = InformationTimes(sim.graph, 0.01);
-  OutlierOptions outliers;
-  outliers.count = 500;
-  outliers.policy = OutlierPolicy::kLocalGrouped;
-  outliers.group_size = 10;
-  outliers.seed = 3;
+  const OverstatedWorld world = SimulateOverstatedWorld(1500, 3, 500, 3);
+  const PoseGraph2& graph = world.graph;
   std::set<ClosureId> injected;
-  for (const InjectedClosure& c : InjectOutliers(graph, outliers)) injected.insert(c.id);
+  for (const InjectedClosure& c : world.injected) injected.insert(c.id);
 
   PoseGraphOptimizerOptions first_only;
   first_only.narrow_gate = false;
@@ -176,7 +193,7 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
   CHECK(guarded.chi2 == Approx(first.chi2).epsilon(1e-9));
 
   // Right information: the calibrated gate is not a third of the first's.
-  const PoseGraphOptimization right = OptimizePoseGraph(sim.graph);
+  const PoseGraphOptimization right = OptimizePoseGraph(world.right);
   CHECK_FALSE(right.narrowed);
   CHECK(right.inlier_noise_scale.cycles == 400);
 }
@@ -184,20 +201,12 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
 TEST_CASE("the narrowed solve keeps the hierarchy's policies: disabled closures stay off, coupled "
           "children follow their parents",
           "[backend][noise-scale][switchable]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 1500;
-  world.seed = 4;
-  const SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  PoseGraph2 graph = InformationTimes(sim.graph, 0.01);
-  OutlierOptions outliers;
-  outliers.count = 300;
-  outliers.policy = OutlierPolicy::kLocalGrouped;
-  outliers.group_size = 10;
-  outliers.seed = 7;
+  const OverstatedWorld world = SimulateOverstatedWorld(1500, 4, 300, 7);
+  const PoseGraph2& graph = world.graph;
   PoseGraphOptimizerOptions options;
   std::set<ClosureId> injected;
   std::map<int, ClosureId> first_of_group;
-  for (const InjectedClosure& c : InjectOutliers(graph, outliers)) {
+  for (const InjectedClosure& c : world.injected) {
     injected.insert(c.id);
     // As the hierarchy couples an inferred closure to its visual parent.
     const auto [first, is_first] = first_of_group.emplace(c.group, c.id);
