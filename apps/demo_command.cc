@@ -1,9 +1,9 @@
-// catgraph demo [-o OUT] [--hierarchy H] [--quiet]
+// catgraph demo [-o OUT] [--scenario NAME|FILE] [--hierarchy H] [--quiet]
 //
 // Everything on simulated data in a few minutes: simulate office-change (the
-// furniture of one corridor moved before the second traversal), map it with
-// `catgraph map`, and print what came of it. The same commands a user would
-// type, run in-process.
+// furniture of one corridor moved before the second traversal) or another
+// scenario, map it with `catgraph map`, and print what came of it. The same
+// commands a user would type, run in-process.
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -17,12 +17,14 @@
 #include "apps/commands.h"
 #include "apps/localization_report.h"
 #include "backend/io/file_error.h"
+#include "simulation/scenario.h"
 
 namespace catgraph {
 namespace {
 
 struct DemoOptions {
   std::string output = "catgraph-demo";
+  std::string scenario = "office-change";
   std::string hierarchy = "cascade";
   bool quiet = false;
 };
@@ -42,11 +44,16 @@ void RunStep(const std::vector<std::string>& args, std::ostream& out) {
 }
 
 void RunDemo(const DemoOptions& o, std::ostream& out) {
+  // Loaded here too, so that a bad scenario file fails before anything is
+  // written. The data folder is named after the built-in scenario or the
+  // file (its stem), never after a name inside the file.
+  const Scenario scenario = LoadScenario(o.scenario);
+  const std::string name = std::filesystem::path(o.scenario).stem().string();
   const std::filesystem::path dir(o.output);
-  const std::string data = (dir / "office-change").string(), map = (dir / "map").string();
+  const std::string data = (dir / name).string(), map = (dir / "map").string();
   std::vector<std::string> quiet;
   if (o.quiet) quiet.push_back("--quiet");
-  std::vector<std::string> simulate = {"simulate", "--scenario", "office-change", "-o", data};
+  std::vector<std::string> simulate = {"simulate", "--scenario", o.scenario, "-o", data};
   simulate.insert(simulate.end(), quiet.begin(), quiet.end());
   RunStep(simulate, out);
   std::vector<std::string> mapping = {"map", data, "-o", map, "--hierarchy", o.hierarchy};
@@ -56,7 +63,9 @@ void RunDemo(const DemoOptions& o, std::ostream& out) {
   const std::filesystem::path report_path = dir / "map" / "report.json";
   std::ifstream in(report_path);
   const nlohmann::json report = nlohmann::json::parse(in);
-  out << "\ncatgraph demo: office-change, " << report.at("frames").get<int>() << " frames over two traversals\n";
+  const std::size_t traversals = scenario.traversals.size();
+  out << "\ncatgraph demo: " << name << ", " << report.at("frames").get<int>() << " frames over "
+      << (traversals == 2 ? std::string("two") : std::to_string(traversals)) << " traversals\n";
   for (const char* kind : {"visual", "inferred"}) {
     const nlohmann::json& k = report.at("closures_by_kind").at(kind);
     out << "  " << kind << " closures: " << k.at("count").get<int>() << ", " << k.at("accepted").get<int>()
@@ -83,7 +92,9 @@ void AddDemoCommand(CLI::App& app, std::ostream& out) {
       "demo",
       "Simulate office-change (furniture moved before the second traversal), map it with catgraph map, and "
       "summarise: closures by kind, their errors, ATE before and after, where the pictures are.");
-  cmd->add_option("-o,--output", o->output, "Output directory (office-change/ and map/ inside)")
+  cmd->add_option("-o,--output", o->output, "Output directory (the scenario's data and map/ inside)")
+      ->capture_default_str();
+  cmd->add_option("--scenario", o->scenario, "Built-in scenario name or scenario file, as catgraph simulate")
       ->capture_default_str();
   cmd->add_option("--hierarchy", o->hierarchy, "Closure hierarchy policy (as catgraph map)")
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
