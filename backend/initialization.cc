@@ -91,10 +91,11 @@ RotationMatrix<D> ProjectToRotation(const RotationMatrix<D>& m) {
   return svd.matrixU() * s * svd.matrixV().transpose();
 }
 
-// Solves min sum_rows (a_row . x - b_row)^2 through the normal equations.
-Eigen::VectorXd SolveLeastSquares(int unknowns, const std::vector<Eigen::Triplet<double>>& a,
-                                  int rows, const Eigen::VectorXd& b) {
-  Eigen::SparseMatrix<double> m(rows, unknowns);
+// Solves min ||A X - B||_F through the normal equations, for the columns of
+// B at once: one factorisation, as many solves.
+Eigen::MatrixXd SolveLeastSquares(int unknowns, const std::vector<Eigen::Triplet<double>>& a,
+                                  const Eigen::MatrixXd& b) {
+  Eigen::SparseMatrix<double> m(b.rows(), unknowns);
   m.setFromTriplets(a.begin(), a.end());
   const Eigen::SparseMatrix<double> normal = m.transpose() * m;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
@@ -113,67 +114,61 @@ void Chordal(PoseGraph<PoseT>& graph) {
     if (id != root) index.emplace(id, static_cast<int>(index.size()));
   }
   const int n = static_cast<int>(index.size());
-  // Rotations: unknowns are the rows of each R (D*D per vertex). For row r,
-  // R_j[r,:] = R_i[r,:] R_ij, i.e. R_ij^T x_{i,r} - x_{j,r} = 0.
+  const int rows = static_cast<int>(graph.constraints.size()) * kD;
+  // Rotations. Row r of each R_j is R_i's row r times R_ij: R_ij^T x_{i,r} -
+  // x_{j,r} = 0. The D rows are D least-squares problems with one matrix (D
+  // unknowns per vertex) and their own right-hand sides (R_root = I known):
+  // one factorisation solves them all.
   std::vector<Eigen::Triplet<double>> a;
-  std::vector<double> b;
+  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(rows, kD);
   int row = 0;
-  auto unknown = [&](PoseId id, int r, int c) { return index.at(id) * kD * kD + r * kD + c; };
   for (const auto& e : graph.constraints) {
     const double w = std::sqrt(ChordalWeightsOf(e.measurement.information).kappa);
     const RotationMatrix<kD> rt = RotationOf(e.measurement.mean).transpose();
-    for (int r = 0; r < kD; ++r) {
-      for (int k = 0; k < kD; ++k, ++row) {
-        // sum_c rt(k, c) x_{i,r,c} - x_{j,r,k} = 0, with R_root = I known.
-        double rhs = 0.0;
-        for (int c = 0; c < kD; ++c) {
-          if (e.from == root) {
-            rhs -= w * rt(k, c) * (r == c ? 1.0 : 0.0);
-          } else {
-            a.emplace_back(row, unknown(e.from, r, c), w * rt(k, c));
-          }
-        }
-        if (e.to == root) {
-          rhs += w * (r == k ? 1.0 : 0.0);
+    for (int k = 0; k < kD; ++k, ++row) {
+      // sum_c rt(k, c) x_{i,r,c} - x_{j,r,k} = 0.
+      for (int c = 0; c < kD; ++c) {
+        if (e.from == root) {
+          b(row, c) -= w * rt(k, c);  // x_{root,r,c} = (r == c)
         } else {
-          a.emplace_back(row, unknown(e.to, r, k), -w);
+          a.emplace_back(row, index.at(e.from) * kD + c, w * rt(k, c));
         }
-        b.push_back(rhs);
+      }
+      if (e.to == root) {
+        b(row, k) += w;
+      } else {
+        a.emplace_back(row, index.at(e.to) * kD + k, -w);
       }
     }
   }
-  const Eigen::VectorXd x =
-      SolveLeastSquares(n * kD * kD, a, row, Eigen::Map<Eigen::VectorXd>(b.data(), row));
+  const Eigen::MatrixXd x = SolveLeastSquares(n * kD, a, b);  // column r: the rows r
   std::unordered_map<PoseId, RotationMatrix<kD>> rotations;
   rotations.emplace(root, RotationMatrix<kD>::Identity());
   for (const auto& [id, k] : index) {
     RotationMatrix<kD> m;
     for (int r = 0; r < kD; ++r) {
-      for (int c = 0; c < kD; ++c) m(r, c) = x(k * kD * kD + r * kD + c);
+      for (int c = 0; c < kD; ++c) m(r, c) = x(k * kD + c, r);
     }
     rotations.emplace(id, ProjectToRotation<kD>(m));
   }
-  // Translations: t_j - t_i = R_i t_ij, t_root = 0.
+  // Translations: t_j - t_i = R_i t_ij, t_root = 0; the D coordinates are D
+  // problems with one matrix (a weighted graph Laplacian).
   a.clear();
-  b.clear();
+  b.setZero(static_cast<int>(graph.constraints.size()), kD);
   row = 0;
   for (const auto& e : graph.constraints) {
     const double w = std::sqrt(ChordalWeightsOf(e.measurement.information).tau);
-    const Eigen::Matrix<double, kD, 1> rhs =
-        w * rotations.at(e.from) * TranslationOf(e.measurement.mean);
-    for (int k = 0; k < kD; ++k, ++row) {
-      if (e.to != root) a.emplace_back(row, index.at(e.to) * kD + k, w);
-      if (e.from != root) a.emplace_back(row, index.at(e.from) * kD + k, -w);
-      b.push_back(rhs(k));
-    }
+    b.row(row) = (w * rotations.at(e.from) * TranslationOf(e.measurement.mean)).transpose();
+    if (e.to != root) a.emplace_back(row, index.at(e.to), w);
+    if (e.from != root) a.emplace_back(row, index.at(e.from), -w);
+    ++row;
   }
-  const Eigen::VectorXd t =
-      SolveLeastSquares(n * kD, a, row, Eigen::Map<Eigen::VectorXd>(b.data(), row));
+  const Eigen::MatrixXd t = SolveLeastSquares(n, a, b);
   const auto& root_vertex = graph.vertices.at(root);
   const PoseT anchor = root_vertex.pose ? *root_vertex.pose : PoseT::Identity();
   for (auto& [id, v] : graph.vertices) {
     Eigen::Matrix<double, kD, 1> translation = Eigen::Matrix<double, kD, 1>::Zero();
-    if (id != root) translation = t.template segment<kD>(index.at(id) * kD);
+    if (id != root) translation = t.row(index.at(id)).transpose();
     v.pose = anchor * MakePose(rotations.at(id), translation);
   }
 }
