@@ -64,6 +64,9 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["narrow_newly_rejected"] = r.narrow_newly_rejected;
   j["narrow_iterations"] = r.narrowed ? r.narrowed->iterations : 0;
   j["narrow_time_s"] = r.narrowed ? r.narrowed->time_s : 0.0;
+  j["readmitted"] = r.readmitted;
+  j["readmit_test_time_s"] = r.readmit_test_time_s;
+  j["readmit_time_s"] = r.readmit_test_time_s + (r.readmission ? r.readmission->time_s : 0.0);
   j["accepted"] = r.accepted;
   j["rejected"] = r.rejected;
   if (with_closures) {
@@ -74,7 +77,8 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
                                {"to", d.to.value()},
                                {"kind", ToString(d.kind)},
                                {"weight", d.weight},
-                               {"accepted", d.accepted}});
+                               {"accepted", d.accepted},
+                               {"readmitted", d.readmitted}});
     }
   }
   return j;
@@ -119,7 +123,13 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
   }
   out << (result.refinement ? "refined without the rejected closures: " +
                                   result.refinement->BriefReport() + "\n"
-                            : std::string())
+                            : std::string());
+  if (result.readmitted > 0) {
+    out << result.readmitted << " rejected closures consistent with the refined map by their innovation, "
+        << "readmitted (--no-readmit to keep them out; test " << result.readmit_test_time_s
+        << " s), refined again: " << result.readmission->BriefReport() << '\n';
+  }
+  out
       << "chi2 " << result.chi2 << ", chordal cost " << result.chordal_cost << "; loop closures: " << result.accepted << " accepted, "
       << result.rejected << " rejected\n"
       << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "")
@@ -169,6 +179,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--no-narrow-gate{false}", o->optimizer.narrow_gate,
                 "Keep the first robust solve's decisions, even when the accepted closures' "
                 "short cycles show Gaussian noise far below what their information states");
+  cmd->add_flag("--no-readmit{false}", o->optimizer.readmit,
+                "Keep every closure the robust solve rejected out, even when its innovation "
+                "against the refined map (the map's uncertainty counted) passes the family-wise gate");
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
                   "Switchable: a fixed switch-prior information Xi^-1 instead of the gate "
                   "(Vertigo uses 1); 0 = use the gate")

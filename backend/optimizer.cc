@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -56,25 +57,23 @@ void Summary::SetTimes(const Summary& other) {
   for (const auto field : kTimes) this->*field = other.*field;
 }
 
-OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
-                            const OptimizerOptions& options) {
-  Validate(options);
-  OptimizationResult result{initial, {}};
-  Values& values = result.values;
+namespace {
 
-  ceres::Problem::Options problem_options;
-  // The Problem owns cost and loss functions (the documented hand-off) and
-  // manifolds, which we create per block below.
-  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+using Pose3Manifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
 
+int TangentSize(VariableKind kind) { return kind == VariableKind::kPose3 ? 6 : Values::BlockSize(kind); }
+
+// The factors over `values`' blocks as a ceres::Problem (which keeps
+// pointers into `values`). Bounds only when `bounded`: a marginal is of the
+// Gaussian, which has none. With `only`, the other values are left out.
+void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem, bool bounded,
+                  const std::set<Key>* only = nullptr) {
   for (const Key key : values.keys()) {
+    if (only && !only->contains(key)) continue;
     const VariableKind kind = values.KindOf(key);
     double* block = values.MutableBlock(key);
     if (kind == VariableKind::kPose3) {
-      problem.AddParameterBlock(
-          block, 7,
-          new ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>());
+      problem.AddParameterBlock(block, 7, new Pose3Manifold());
     } else {
       problem.AddParameterBlock(block, Values::BlockSize(kind));
     }
@@ -89,7 +88,8 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
       blocks.push_back(values.MutableBlock(key));
     }
     problem.AddResidualBlock(factor->NewCostFunction().release(),
-                             factor->NewLossFunction().release(), blocks);
+                             bounded ? factor->NewLossFunction().release() : nullptr, blocks);
+    if (!bounded) continue;
     for (const ParameterBound& b : factor->bounds()) {
       double* block = values.MutableBlock(b.key);
       problem.SetParameterLowerBound(block, b.index, b.lower);
@@ -101,6 +101,25 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
       problem.SetParameterBlockConstant(values.MutableBlock(key));
     }
   }
+}
+
+ceres::Problem::Options ProblemOptions() {
+  ceres::Problem::Options options;
+  // The Problem owns cost and loss functions (the documented hand-off) and
+  // manifolds, which BuildProblem creates per block.
+  options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  return options;
+}
+
+}  // namespace
+
+OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
+                            const OptimizerOptions& options) {
+  Validate(options);
+  OptimizationResult result{initial, {}};
+  Values& values = result.values;
+  ceres::Problem problem(ProblemOptions());
+  BuildProblem(graph, values, problem, /*bounded=*/true);
 
   ceres::Solver::Options solver;
   solver.minimizer_type = ceres::TRUST_REGION;
@@ -144,6 +163,85 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
     }
   }
   return result;
+}
+
+std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, const Values& values,
+                                                      const std::vector<std::pair<Key, Key>>& pairs) {
+  std::set<Key> reached;
+  for (const auto& factor : graph.factors()) {
+    for (const Key key : factor->keys()) reached.insert(key);
+  }
+  Values at = values;
+  ceres::Problem problem(ProblemOptions());
+  BuildProblem(graph, at, problem, /*bounded=*/false, &reached);
+  auto block_of = [&](Key key) {
+    if (!reached.contains(key)) {
+      throw std::invalid_argument("JointMarginalCovariances: no factor reaches " + ToString(key));
+    }
+    return const_cast<const double*>(at.MutableBlock(key));
+  };
+  // Ceres wants each block pair once, and only one of (a, b) and (b, a).
+  std::set<std::pair<const double*, const double*>> wanted;
+  for (const auto& [a, b] : pairs) {
+    for (const auto& [x, y] : {std::pair{a, a}, std::pair{a, b}, std::pair{b, b}}) {
+      const double *p = block_of(x), *q = block_of(y);
+      if (!wanted.contains({q, p})) wanted.insert({p, q});
+    }
+  }
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::SPARSE_QR;
+  covariance_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  ceres::Covariance covariance(covariance_options);
+  const std::vector<std::pair<const double*, const double*>> blocks(wanted.begin(), wanted.end());
+  if (!covariance.Compute(blocks, &problem)) {
+    throw std::runtime_error("JointMarginalCovariances: the information matrix is singular "
+                             "(no variable held constant, or one the factors do not determine)");
+  }
+  std::vector<Eigen::MatrixXd> out;
+  for (const auto& [a, b] : pairs) {
+    const int na = TangentSize(at.KindOf(a)), nb = TangentSize(at.KindOf(b));
+    Eigen::MatrixXd joint(na + nb, na + nb);
+    auto fill = [&](Key x, Key y, int row, int col, int rows, int cols) {
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(rows, cols);
+      covariance.GetCovarianceBlockInTangentSpace(block_of(x), block_of(y), block.data());
+      joint.block(row, col, rows, cols) = block;
+    };
+    fill(a, a, 0, 0, na, na);
+    fill(a, b, 0, na, na, nb);
+    fill(b, b, na, na, nb, nb);
+    joint.block(na, 0, nb, na) = joint.block(0, na, na, nb).transpose();
+    out.push_back(std::move(joint));
+  }
+  return out;
+}
+
+LinearizedFactor Linearize(const Factor& factor, const Values& values) {
+  const std::unique_ptr<ceres::CostFunction> cost = factor.NewCostFunction();
+  const std::vector<Key> keys = factor.keys();
+  std::vector<const double*> parameters;
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> ambient;
+  for (const Key key : keys) {
+    if (!values.Contains(key)) throw std::invalid_argument("Linearize: no value for " + ToString(key));
+    parameters.push_back(values.Block(key));
+    ambient.emplace_back(cost->num_residuals(), Values::BlockSize(values.KindOf(key)));
+  }
+  std::vector<double*> jacobians;
+  for (auto& j : ambient) jacobians.push_back(j.data());
+  LinearizedFactor out;
+  out.residual.resize(cost->num_residuals());
+  if (!cost->Evaluate(parameters.data(), out.residual.data(), jacobians.data())) {
+    throw std::runtime_error("Linearize: the factor could not be evaluated");
+  }
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (values.KindOf(keys[i]) != VariableKind::kPose3) {
+      out.jacobians.emplace_back(ambient[i]);
+      continue;
+    }
+    Eigen::Matrix<double, 7, 6, Eigen::RowMajor> plus;
+    Pose3Manifold().PlusJacobian(parameters[i], plus.data());
+    out.jacobians.emplace_back(ambient[i] * plus);
+  }
+  return out;
 }
 
 }  // namespace catgraph

@@ -4,6 +4,10 @@
 #define CATGRAPH_BACKEND_OPTIMIZER_H_
 
 #include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "backend/factor_graph.h"
 
@@ -57,6 +61,30 @@ struct OptimizationResult {
 // otherwise.
 OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
                             const OptimizerOptions& options = {});
+
+// Tangent spaces. A variable's tangent space is the one the optimiser steps
+// in: a Pose2's is its parameters (x, y, theta); a Pose3's is Ceres'
+// ProductManifold<EuclideanManifold<3>, EigenQuaternionManifold>'s (the
+// translation, then the rotation's body-frame increment, 6 in all); a
+// switch's is its value.
+
+// GTSAM's Marginals, for pairs of variables: the joint covariance of `a` and
+// `b` ([a; b] in their tangent spaces) of the Gaussian the factors define
+// when linearised at `values` (robust losses ignored). Constant variables
+// have zero covariance. Throws std::runtime_error when it does not exist
+// (the information matrix is singular: no variable held constant, a
+// variable no factor reaches); std::invalid_argument for a key that is not
+// in `values` or that no factor reaches.
+std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, const Values& values,
+                                                      const std::vector<std::pair<Key, Key>>& pairs);
+
+// A factor linearised at `values` (GTSAM's linearize): its residual, and its
+// Jacobian with respect to each of its keys in their tangent spaces.
+struct LinearizedFactor {
+  Eigen::VectorXd residual;
+  std::vector<Eigen::MatrixXd> jacobians;  // in the order of keys()
+};
+LinearizedFactor Linearize(const Factor& factor, const Values& values);
 
 }  // namespace catgraph
 

@@ -86,11 +86,9 @@ double Gate(RelativePoseCostType cost, double probability) {
   return ChiSquareQuantile(PoseT::kTangentDim, probability);
 }
 
-// Whether the gate may be narrowed (PoseGraphOptimizerOptions::narrow_gate):
-// asked for, and the method decides at the gate, with no explicit parameter
-// in its place.
-bool NarrowsGate(const PoseGraphOptimizerOptions& o) {
-  if (!o.estimate_noise_scale || !o.narrow_gate) return false;
+// Whether the method decides at the gate, with no explicit parameter in its
+// place.
+bool DecidesAtGate(const PoseGraphOptimizerOptions& o) {
   switch (o.method) {
     case RobustMethod::kNone: return false;
     case RobustMethod::kSwitchable: return o.switch_prior_information == 0.0;
@@ -100,6 +98,36 @@ bool NarrowsGate(const PoseGraphOptimizerOptions& o) {
     case RobustMethod::kGnc: return true;
   }
   return false;
+}
+
+// Whether the gate may be narrowed (PoseGraphOptimizerOptions::narrow_gate).
+bool NarrowsGate(const PoseGraphOptimizerOptions& o) {
+  return o.estimate_noise_scale && o.narrow_gate && DecidesAtGate(o);
+}
+
+// The normalised innovation squared of each closure in `tested` against the
+// map `graph` holds, solved by `map` (the odometry and the accepted
+// closures, a pose held constant): r^T (I + J Sigma J^T)^-1 r, for the
+// closure's whitened residual r, its Jacobian J and the map's joint
+// covariance Sigma of its two poses. Where Sigma is small it is the
+// closure's chi2; it is less where the map itself is uncertain.
+template <typename PoseT>
+std::vector<double> InnovationChi2(const FactorGraph& map, const Values& values,
+                                   const std::vector<const Constraint<PoseT>*>& tested) {
+  std::vector<std::pair<Key, Key>> pairs;
+  for (const auto* c : tested) pairs.emplace_back(PoseKey(c->from), PoseKey(c->to));
+  const std::vector<Eigen::MatrixXd> covariances = JointMarginalCovariances(map, values, pairs);
+  std::vector<double> nis;
+  for (std::size_t i = 0; i < tested.size(); ++i) {
+    const BetweenFactor<PoseT> factor(tested[i]->from, tested[i]->to, tested[i]->measurement);
+    const LinearizedFactor linear = Linearize(factor, values);
+    Eigen::MatrixXd j(linear.residual.size(), covariances[i].rows());
+    j << linear.jacobians[0], linear.jacobians[1];
+    const Eigen::MatrixXd s =
+        Eigen::MatrixXd::Identity(j.rows(), j.rows()) + j * covariances[i] * j.transpose();
+    nis.push_back(linear.residual.dot(s.ldlt().solve(linear.residual)));
+  }
+  return nis;
 }
 
 // The loss of a method. Unset parameters (0) are set from the chi2 gate g so
@@ -496,54 +524,134 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       }
     }
   }
-  for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
   out.initial_guess = initial_guess;
   out.initial_guess_time_s = initial_guess_time_s;
   out.noise_scale = noise_scale;
   out.gate_factor = gate_factor;
 
-  // Refinement: the decisions stand; the poses are re-solved by plain least
-  // squares over the odometry and the accepted closures at full weight, so
-  // that the residual pull of rejected closures (weight up to 0.5) and the
-  // down-weighting of accepted ones leave no bias in the map. It starts from
-  // the robust solution and from the initial guess and keeps the lower cost:
-  // a method that decides right on a map its early rounds folded (GNC after
-  // a least-squares start among outliers) ends in a poor local minimum,
-  // which the initial guess avoids.
-  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
-  if (options.refine && robust_solve && out.summary.IsUsable()) {
+  // The map of the odometry and the accepted closures at full weight, as
+  // factors over the graph's poses.
+  auto rejected_closures = [&out] {
     std::set<ClosureId> rejected;
     for (const ClosureDecision& d : out.closures) {
       if (!d.accepted) rejected.insert(d.id);
     }
+    return rejected;
+  };
+  auto map_factors = [&](FactorGraph& factors, Values& values, const std::map<PoseId, Vertex<PoseT>>& poses) {
+    add_poses(factors, values, poses);
+    const std::set<ClosureId> rejected = rejected_closures();
+    for (const auto& c : graph.constraints) {
+      if (rejected.contains(c.id)) continue;
+      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options.cost);
+    }
+  };
+  // Refinement: the decisions stand; the poses are re-solved by plain least
+  // squares over the odometry and the accepted closures at full weight, so
+  // that the residual pull of rejected closures (weight up to 0.5) and the
+  // down-weighting of accepted ones leave no bias in the map. It starts from
+  // the robust solution and, with `from_initial_guess`, from the initial
+  // guess too, and keeps the lower cost: a method that decides right on a
+  // map its early rounds folded (GNC after a least-squares start among
+  // outliers) ends in a poor local minimum, which the initial guess avoids.
+  auto refine = [&](bool from_initial_guess) {
     std::optional<OptimizationResult> best;
-    Summary times;  // of both starts
+    Summary times;  // of every start
+    std::optional<Summary> failed;
     using Poses = std::map<PoseId, Vertex<PoseT>>;
-    const Poses* starts[] = {&graph.vertices, &initial_poses};
+    std::vector<const Poses*> starts = {&graph.vertices};
+    if (from_initial_guess) starts.push_back(&initial_poses);
     for (const Poses* start_poses : starts) {
       Values start;
-      FactorGraph refine;
-      add_poses(refine, start, *start_poses);
-      for (const auto& c : graph.constraints) {
-        if (rejected.contains(c.id)) continue;
-        refine.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{},
-                                             options.cost);
-      }
-      OptimizationResult refined = Optimize(refine, start, options.solver);
+      FactorGraph factors;
+      map_factors(factors, start, *start_poses);
+      OptimizationResult refined = Optimize(factors, start, options.solver);
       times.AddTimes(refined.summary);
-      if (refined.summary.IsUsable() &&
-          (!best || refined.summary.final_cost < best->summary.final_cost)) {
+      if (refined.summary.IsUsable() && (!best || refined.summary.final_cost < best->summary.final_cost)) {
         best = std::move(refined);
-      } else if (!best && !out.refinement) {
-        out.refinement = refined.summary;  // reported if neither start succeeds
+      } else if (!best && !failed) {
+        failed = refined.summary;  // reported if no start succeeds
       }
     }
-    if (best) {
-      take_poses(best->values);
-      out.refinement = best->summary;
+    Summary summary = best ? best->summary : *failed;
+    if (best) take_poses(best->values);
+    summary.SetTimes(times);
+    return summary;
+  };
+  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
+  if (options.refine && robust_solve && out.summary.IsUsable()) out.refinement = refine(true);
+
+  // Readmission (PoseGraphOptimizerOptions::readmit): each closure the
+  // method rejected is tested once more against the refined map, by its
+  // innovation (the map's own uncertainty counted) at the family-wise gate;
+  // those that pass are accepted and the map refined again, and the rest
+  // tested against that map, until none passes (at most kReadmitRounds).
+  if (options.readmit && DecidesAtGate(options) && options.cost == RelativePoseCostType::kG2o &&
+      !out.narrowed && out.refinement && out.refinement->IsUsable()) {
+    constexpr int kReadmitRounds = 3;
+    std::map<ClosureId, const Constraint<PoseT>*> constraint_of;
+    for (const auto& c : graph.constraints) constraint_of.emplace(c.id, &c);
+    auto by_method = [&](const ClosureDecision& d) {
+      const Constraint<PoseT>& c = *constraint_of.at(d.id);
+      return robust(c) && (!c.switch_id || added_switches.contains(*c.switch_id)) &&
+             !options.disabled_closures.contains(d.id);
+    };
+    // The family-wise gate for the n closures the method decided (n >= 1
+    // when there is a candidate).
+    const auto decided = std::count_if(out.closures.begin(), out.closures.end(), by_method);
+    auto family_gate = [&] {
+      return gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
+                                                               static_cast<double>(decided));
+    };
+    Summary times;  // of the refinements
+    for (int round = 0; round < kReadmitRounds; ++round) {
+      // Rejected by their own weight, not by a coupled switch.
+      std::vector<ClosureDecision*> candidates;
+      std::vector<const Constraint<PoseT>*> tested;
+      for (ClosureDecision& d : out.closures) {
+        if (d.accepted || d.own_weight > 0.5 || d.own_weight != d.weight || !by_method(d)) continue;
+        candidates.push_back(&d);
+        tested.push_back(constraint_of.at(d.id));
+      }
+      if (candidates.empty()) break;
+      const auto start = std::chrono::steady_clock::now();
+      Values values;
+      FactorGraph map;
+      map_factors(map, values, graph.vertices);
+      std::vector<double> nis;
+      try {
+        nis = InnovationChi2<PoseT>(map, values, tested);
+      } catch (const std::runtime_error&) {
+        // The accepted closures leave the map undetermined: nothing to test against.
+      }
+      out.readmit_test_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const auto decisions_before = out.closures;
+      const auto switches_before = graph.switches;
+      const auto vertices_before = graph.vertices;
+      std::size_t passed = 0;
+      for (std::size_t i = 0; i < nis.size(); ++i) {
+        if (!(nis[i] <= family_gate())) continue;
+        ClosureDecision& d = *candidates[i];
+        d.accepted = d.readmitted = true;
+        d.weight = d.own_weight = 1.0;
+        if (const auto s = switch_of.find(d.id); s != switch_of.end()) graph.switches.at(s->second).value = 1.0;
+        ++passed;
+      }
+      if (passed == 0) break;
+      Summary refined = refine(false);
+      times.AddTimes(refined);
+      if (!refined.IsUsable()) {  // the last map and its decisions stand
+        out.closures = decisions_before;
+        graph.switches = switches_before;
+        graph.vertices = vertices_before;
+        break;
+      }
+      out.readmitted += passed;
+      out.readmission = refined;
     }
-    out.refinement->SetTimes(times);
+    if (out.readmission) out.readmission->SetTimes(times);
   }
+  for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
   out.graph = std::move(graph);

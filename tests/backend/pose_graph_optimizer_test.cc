@@ -97,6 +97,56 @@ TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend
   CHECK_THROWS_AS(Optimize(dangling, initial), std::invalid_argument);
 }
 
+// Two steps from a pose held constant, both measuring no motion, linearised
+// at the identity where every Jacobian is +-I: the second pose's covariance
+// is the sum of the steps' covariances, the first's is the first step's, and
+// so is their cross-covariance. 2D and 3D (in the Pose3 tangent space:
+// translation, then rotation).
+template <typename PoseT, int kDim>
+void CheckChainMarginals() {
+  using Matrix = Eigen::Matrix<double, kDim, kDim>;
+  Matrix a = Matrix::Random(), b = Matrix::Random();
+  const Matrix omega1 = a * a.transpose() + Matrix::Identity(), omega2 = b * b.transpose() + Matrix::Identity();
+  Values values;
+  FactorGraph graph;
+  for (int k = 0; k < 3; ++k) values.Insert(PoseId(k), PoseT());
+  RelativePoseMeasurement<PoseT> z;
+  z.information = omega1;
+  graph.Emplace<BetweenFactor<PoseT>>(PoseId(0), PoseId(1), z);
+  z.information = omega2;
+  graph.Emplace<BetweenFactor<PoseT>>(PoseId(1), PoseId(2), z);
+  // Without a gauge the information is singular.
+  CHECK_THROWS_AS(JointMarginalCovariances(graph, values, {{PoseKey(PoseId(1)), PoseKey(PoseId(2))}}),
+                  std::runtime_error);
+  graph.SetConstant(PoseKey(PoseId(0)));
+  const std::vector<Eigen::MatrixXd> joint = JointMarginalCovariances(
+      graph, values, {{PoseKey(PoseId(1)), PoseKey(PoseId(2))}, {PoseKey(PoseId(0)), PoseKey(PoseId(2))}});
+  REQUIRE(joint.size() == 2);
+  REQUIRE(joint[0].rows() == 2 * kDim);
+  const Matrix s1 = omega1.inverse(), s2 = omega2.inverse();
+  CHECK((joint[0].topLeftCorner<kDim, kDim>() - s1).norm() < 1e-9);
+  CHECK((joint[0].topRightCorner<kDim, kDim>() - s1).norm() < 1e-9);
+  CHECK((joint[0].bottomLeftCorner<kDim, kDim>() - s1).norm() < 1e-9);
+  CHECK((joint[0].bottomRightCorner<kDim, kDim>() - (s1 + s2)).norm() < 1e-9);
+  CHECK(joint[1].topLeftCorner<kDim, kDim>().norm() == 0.0);  // held constant
+  CHECK((joint[1].bottomRightCorner<kDim, kDim>() - (s1 + s2)).norm() < 1e-9);
+  CHECK_THROWS_AS(JointMarginalCovariances(graph, values, {{PoseKey(PoseId(1)), PoseKey(PoseId(7))}}),
+                  std::invalid_argument);
+  // The factor's linearisation there: residual 0, Jacobians -L and L for
+  // the square-root information L (L^T L = Omega).
+  const LinearizedFactor linear = Linearize(*graph.factors()[1], values);
+  CHECK(linear.residual.norm() == 0.0);
+  REQUIRE(linear.jacobians.size() == 2);
+  CHECK((linear.jacobians[1].transpose() * linear.jacobians[1] - omega2).norm() < 1e-9);
+  CHECK((linear.jacobians[0] + linear.jacobians[1]).norm() < 1e-12);
+}
+
+TEST_CASE("joint marginal covariances of a chain sum its steps' covariances, 2D and 3D", "[backend][api][marginals]") {
+  std::srand(7);
+  CheckChainMarginals<Pose2, 3>();
+  CheckChainMarginals<Pose3, 6>();
+}
+
 TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][init]") {
   ManhattanWorldOptions options;
   options.num_poses = 200;
@@ -160,6 +210,7 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
     PoseGraphOptimizerOptions options;
     options.method = method;
+    options.readmit = false;  // the robust solve's decisions, refined
     const PoseGraphOptimization refined = OptimizePoseGraph(sim.graph, options);
     REQUIRE(refined.refinement);
     REQUIRE(refined.refinement->IsUsable());
@@ -187,6 +238,52 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
     CAPTURE(ToString(method));
     CHECK(largest_m < 1e-5);
     CHECK(Chi2(reference.graph) < Chi2(raw.graph));
+  }
+}
+
+// Readmission (PoseGraphOptimizerOptions::readmit) on a world with the
+// right information: the true closures the gate rejected come back, the
+// injected ones stay out, for every method deciding at the gate.
+TEST_CASE("readmission brings back the true closures the gate rejected and no false one",
+          "[backend][readmit]") {
+  ManhattanWorldOptions world;
+  world.num_poses = 800;
+  world.seed = 4;
+  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
+  OutlierOptions outliers;
+  outliers.count = 50;
+  outliers.seed = 6;
+  outliers.policy = OutlierPolicy::kLocal;
+  std::set<ClosureId> injected;
+  for (const InjectedClosure& c : InjectOutliers(sim.graph, outliers)) injected.insert(c.id);
+  for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs, RobustMethod::kGnc}) {
+    CAPTURE(ToString(method));
+    PoseGraphOptimizerOptions options;
+    options.method = method;
+    options.readmit = false;
+    const PoseGraphOptimization gated = OptimizePoseGraph(sim.graph, options);
+    options.readmit = true;
+    const PoseGraphOptimization r = OptimizePoseGraph(sim.graph, options);
+    const testing::InjectedDecisions before = testing::CountInjected(gated, injected);
+    const testing::InjectedDecisions after = testing::CountInjected(r, injected);
+    CAPTURE(before.true_rejected, before.false_accepted, after.true_rejected, after.false_accepted);
+    CHECK(before.true_rejected > 0);
+    CHECK(after.true_rejected == 0);  // measured 5, 6 and 2 before
+    CHECK(after.false_accepted == before.false_accepted);
+    CHECK(r.readmitted == before.true_rejected - after.true_rejected);
+    std::size_t flagged = 0;
+    for (std::size_t k = 0; k < r.closures.size(); ++k) {
+      const ClosureDecision &d = r.closures[k], &g = gated.closures[k];
+      flagged += d.readmitted;
+      if (d.readmitted) {
+        CHECK_FALSE(g.accepted);
+        CHECK(d.accepted);
+        CHECK(d.weight == 1.0);
+      } else {
+        CHECK(d.accepted == g.accepted);
+      }
+    }
+    CHECK(flagged == r.readmitted);
   }
 }
 
@@ -285,11 +382,24 @@ TEST_CASE("with the default initial guess, switchable constraints keep every clo
   CHECK(r.initial_guess == InitialGuess::kChordal);
   CHECK(r.rejected == 0);
   CHECK(r.accepted == 20);
-  // From the file's poses the switches settle in a local minimum: the
-  // reason kAuto is the default.
+  // From the file's poses the switches settle in a local minimum, the
+  // reason kAuto is the default ...
   PoseGraphOptimizerOptions file;
   file.initial_guess = InitialGuess::kFile;
-  CHECK(OptimizePoseGraph(mit, file).rejected > 0);
+  file.readmit = false;
+  const PoseGraphOptimization trapped = OptimizePoseGraph(mit, file);
+  CHECK(trapped.rejected > 0);
+  // ... from which readmission brings every closure back.
+  file.readmit = true;
+  const PoseGraphOptimization readmitted = OptimizePoseGraph(mit, file);
+  CHECK(readmitted.rejected == 0);
+  CHECK(readmitted.readmitted == trapped.rejected);
+  // Its map: the plain least-squares optimum, as from the chordal start
+  // (the chi2 without the switches).
+  PoseGraphOptimizerOptions plain;
+  plain.method = RobustMethod::kNone;
+  CHECK(Chi2(DropRejected(readmitted.graph, readmitted.closures)) ==
+        Approx(OptimizePoseGraph(mit, plain).chi2).epsilon(1e-6));
 }
 
 // Plain least squares on SE-Sync's cost from the chordal initial guess.
