@@ -596,20 +596,26 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       return robust(c) && (!c.switch_id || added_switches.contains(*c.switch_id)) &&
              !options.disabled_closures.contains(d.id);
     };
-    // The family-wise gate for the n closures the method decided (n >= 1
-    // when there is a candidate).
+    // The family-wise gate for the n closures the method decided.
     const auto decided = std::count_if(out.closures.begin(), out.closures.end(), by_method);
-    auto family_gate = [&] {
-      return gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
-                                                               static_cast<double>(decided));
+    const double family_gate =
+        decided == 0 ? 0.0
+                     : gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
+                                                                      static_cast<double>(decided));
+    // Rejected by its own weight, with every coupled switch on.
+    auto rejected_by_itself = [&](const ClosureDecision& d) {
+      if (d.accepted || d.own_weight > 0.5) return false;
+      const auto coupled = coupled_switches.find(d.id);
+      return coupled == coupled_switches.end() ||
+             std::all_of(coupled->second.begin(), coupled->second.end(),
+                         [&](SwitchId s) { return psi(graph.switches.at(s).value) > 0.5; });
     };
     Summary times;  // of the refinements
     for (int round = 0; round < kReadmitRounds; ++round) {
-      // Rejected by their own weight, not by a coupled switch.
       std::vector<ClosureDecision*> candidates;
       std::vector<const Constraint<PoseT>*> tested;
       for (ClosureDecision& d : out.closures) {
-        if (d.accepted || d.own_weight > 0.5 || d.own_weight != d.weight || !by_method(d)) continue;
+        if (!rejected_by_itself(d) || !by_method(d)) continue;
         candidates.push_back(&d);
         tested.push_back(constraint_of.at(d.id));
       }
@@ -630,7 +636,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       const auto vertices_before = graph.vertices;
       std::size_t passed = 0;
       for (std::size_t i = 0; i < nis.size(); ++i) {
-        if (!(nis[i] <= family_gate())) continue;
+        if (!(nis[i] <= family_gate)) continue;
         ClosureDecision& d = *candidates[i];
         d.accepted = d.readmitted = true;
         d.weight = d.own_weight = 1.0;
