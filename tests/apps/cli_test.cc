@@ -145,6 +145,10 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   }
   CHECK(j.at("narrowed") == false);
   CHECK(j.at("narrow_factor") == 1.0);
+  // Readmission's keys: its time is part of time_s; every closure says
+  // whether it was readmitted, and the count agrees.
+  CHECK(j.at("readmit_time_s").get<double>() >= j.at("readmit_test_time_s").get<double>());
+  CHECK(j.at("readmit_time_s").get<double>() <= j.at("time_s").get<double>());
   const auto info = nlohmann::json::parse(Run({"info", out, "--json"}).out);
   // One switch per loop closure, written with the graph.
   CHECK(info.at("switches") == info.at("loop_closures"));
@@ -152,6 +156,9 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   std::ifstream report_file(report);
   const auto full = nlohmann::json::parse(report_file);
   CHECK(full.at("closures").size() == j.at("accepted").get<std::size_t>() + j.at("rejected").get<std::size_t>());
+  std::size_t readmitted = 0;
+  for (const auto& c : full.at("closures")) readmitted += c.at("readmitted").get<bool>() ? 1 : 0;
+  CHECK(readmitted == j.at("readmitted").get<std::size_t>());
   // --drop-rejected writes a graph without switches.
   REQUIRE(Run({"optimize", graph, "-o", out, "--drop-rejected"}).status == 0);
   CHECK(nlohmann::json::parse(Run({"info", out, "--json"}).out).at("switches") == 0);
