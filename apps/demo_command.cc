@@ -65,7 +65,9 @@ void RunDemo(const DemoOptions& o, std::ostream& out) {
   const nlohmann::json report = nlohmann::json::parse(in);
   const std::size_t traversals = scenario.traversals.size();
   out << "\ncatgraph demo: " << name << ", " << report.at("frames").get<int>() << " frames over "
-      << (traversals == 2 ? std::string("two") : std::to_string(traversals)) << " traversals\n";
+      << (traversals == 1 ? std::string("one traversal")
+                          : (traversals == 2 ? std::string("two") : std::to_string(traversals)) + " traversals")
+      << '\n';
   for (const char* kind : {"visual", "inferred"}) {
     const nlohmann::json& k = report.at("closures_by_kind").at(kind);
     out << "  " << kind << " closures: " << k.at("count").get<int>() << ", " << k.at("accepted").get<int>()

@@ -64,9 +64,10 @@ using Pose3Manifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres:
 int TangentSize(VariableKind kind) { return kind == VariableKind::kPose3 ? 6 : Values::BlockSize(kind); }
 
 // The factors over `values`' blocks as a ceres::Problem (which keeps
-// pointers into `values`). Bounds only when `bounded`: a marginal is of the
-// Gaussian, which has none. With `only`, the other values are left out.
-void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem, bool bounded,
+// pointers into `values`). Robust losses and bounds only with
+// `losses_and_bounds`: a marginal is of the Gaussian, which has neither.
+// With `only`, the other values are left out.
+void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem, bool losses_and_bounds,
                   const std::set<Key>* only = nullptr) {
   for (const Key key : values.keys()) {
     if (only && !only->contains(key)) continue;
@@ -88,8 +89,8 @@ void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& prob
       blocks.push_back(values.MutableBlock(key));
     }
     problem.AddResidualBlock(factor->NewCostFunction().release(),
-                             bounded ? factor->NewLossFunction().release() : nullptr, blocks);
-    if (!bounded) continue;
+                             losses_and_bounds ? factor->NewLossFunction().release() : nullptr, blocks);
+    if (!losses_and_bounds) continue;
     for (const ParameterBound& b : factor->bounds()) {
       double* block = values.MutableBlock(b.key);
       problem.SetParameterLowerBound(block, b.index, b.lower);
@@ -119,7 +120,7 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   OptimizationResult result{initial, {}};
   Values& values = result.values;
   ceres::Problem problem(ProblemOptions());
-  BuildProblem(graph, values, problem, /*bounded=*/true);
+  BuildProblem(graph, values, problem, /*losses_and_bounds=*/true);
 
   ceres::Solver::Options solver;
   solver.minimizer_type = ceres::TRUST_REGION;
@@ -173,12 +174,12 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
   }
   Values at = values;
   ceres::Problem problem(ProblemOptions());
-  BuildProblem(graph, at, problem, /*bounded=*/false, &reached);
+  BuildProblem(graph, at, problem, /*losses_and_bounds=*/false, &reached);
   auto block_of = [&](Key key) {
     if (!reached.contains(key)) {
       throw std::invalid_argument("JointMarginalCovariances: no factor reaches " + ToString(key));
     }
-    return const_cast<const double*>(at.MutableBlock(key));
+    return static_cast<const double*>(at.MutableBlock(key));
   };
   // Ceres wants each block pair once, and only one of (a, b) and (b, a).
   std::set<std::pair<const double*, const double*>> wanted;

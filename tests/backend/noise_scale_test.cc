@@ -282,9 +282,12 @@ TEST_CASE("switchable constraints keep sphere_bignoise's closures: its informati
   REQUIRE(r.summary.IsUsable());
   CHECK(r.noise_scale.cycles == 400);
   CHECK(r.gate_factor == Approx(14.64).epsilon(0.01));
-  // Measured 288 of 6448 (4.5 %); with the gate where the information puts
-  // it, 6384. The noise is heavier-tailed than chi2(6) scaled.
-  CHECK(r.rejected < 6448 / 20);
+  // The robust solve rejects 288 of 6448 (4.5 %); with the gate where the
+  // information puts it, 6384. The noise is heavier-tailed than chi2(6)
+  // scaled. Readmission, at the widened family-wise gate, brings back all
+  // but 6 (measured).
+  CHECK(r.readmitted > 250);
+  CHECK(r.rejected <= 10);
 }
 
 TEST_CASE("Vertigo's Manhattan + 1000 outliers: the narrowed gate rejects the local ones the first "
