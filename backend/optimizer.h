@@ -64,9 +64,10 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
 
 // Tangent spaces. A variable's tangent space is the one the optimiser steps
 // in: a Pose2's is its parameters (x, y, theta); a Pose3's is Ceres'
-// ProductManifold<EuclideanManifold<3>, EigenQuaternionManifold>'s (the
-// translation, then the rotation's body-frame increment, 6 in all); a
-// switch's is its value.
+// ProductManifold<EuclideanManifold<3>, EigenQuaternionManifold>'s, 6 in
+// all: the translation, then the rotation increment d applied on the left,
+// q -> [cos|d|, sin|d| d/|d|] * q (a rotation by 2|d| in the world frame);
+// a switch's is its value.
 
 // GTSAM's Marginals, for pairs of variables: the joint covariance of `a` and
 // `b` ([a; b] in their tangent spaces) of the Gaussian the factors define
