@@ -130,6 +130,15 @@ std::vector<double> InnovationChi2(const FactorGraph& map, const Values& values,
   return nis;
 }
 
+// The ids of the closures `decisions` rejected.
+std::set<ClosureId> RejectedIds(const std::vector<ClosureDecision>& decisions) {
+  std::set<ClosureId> rejected;
+  for (const ClosureDecision& d : decisions) {
+    if (!d.accepted) rejected.insert(d.id);
+  }
+  return rejected;
+}
+
 // The loss of a method. Unset parameters (0) are set from the chi2 gate g so
 // that a closure's weight drops below 0.5 exactly when its chi2 exceeds g, as
 // for a switch: DCS's scale 2 Phi / (Phi + chi2) < 1/2 iff chi2 > 3 Phi;
@@ -479,10 +488,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   // family-wise gate, from the first solve's poses, the rejected ones held
   // off as they are.
   if (NarrowsGate(options) && method_decides_any && out.summary.IsUsable()) {
-    std::set<ClosureId> rejected;
-    for (const ClosureDecision& d : out.closures) {
-      if (!d.accepted) rejected.insert(d.id);
-    }
+    const std::set<ClosureId> rejected = RejectedIds(out.closures);
     const std::size_t tested = out.closures.size() - rejected.size();
     out.inlier_noise_scale = EstimateNoiseScale(graph, options.noise_scale, rejected);
     const NoiseScaleEstimate& inliers = out.inlier_noise_scale;
@@ -531,16 +537,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
 
   // The map of the odometry and the accepted closures at full weight, as
   // factors over the graph's poses.
-  auto rejected_closures = [&out] {
-    std::set<ClosureId> rejected;
-    for (const ClosureDecision& d : out.closures) {
-      if (!d.accepted) rejected.insert(d.id);
-    }
-    return rejected;
-  };
   auto map_factors = [&](FactorGraph& factors, Values& values, const std::map<PoseId, Vertex<PoseT>>& poses) {
     add_poses(factors, values, poses);
-    const std::set<ClosureId> rejected = rejected_closures();
+    const std::set<ClosureId> rejected = RejectedIds(out.closures);
     for (const auto& c : graph.constraints) {
       if (rejected.contains(c.id)) continue;
       factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options.cost);
@@ -631,19 +630,19 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
         // The accepted closures leave the map undetermined: nothing to test against.
       }
       out.readmit_test_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::vector<ClosureDecision*> passed;
+      for (std::size_t i = 0; i < nis.size(); ++i) {
+        if (nis[i] <= family_gate) passed.push_back(candidates[i]);
+      }
+      if (passed.empty()) break;
       const auto decisions_before = out.closures;
       const auto switches_before = graph.switches;
       const auto vertices_before = graph.vertices;
-      std::size_t passed = 0;
-      for (std::size_t i = 0; i < nis.size(); ++i) {
-        if (!(nis[i] <= family_gate)) continue;
-        ClosureDecision& d = *candidates[i];
-        d.accepted = d.readmitted = true;
-        d.weight = d.own_weight = 1.0;
-        if (const auto s = switch_of.find(d.id); s != switch_of.end()) graph.switches.at(s->second).value = 1.0;
-        ++passed;
+      for (ClosureDecision* d : passed) {
+        d->accepted = d->readmitted = true;
+        d->weight = d->own_weight = 1.0;
+        if (const auto s = switch_of.find(d->id); s != switch_of.end()) graph.switches.at(s->second).value = 1.0;
       }
-      if (passed == 0) break;
       Summary refined = refine(false);
       times.AddTimes(refined);
       if (!refined.IsUsable()) {  // the last map and its decisions stand
@@ -652,7 +651,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
         graph.vertices = vertices_before;
         break;
       }
-      out.readmitted += passed;
+      out.readmitted += passed.size();
       out.readmission = refined;
     }
     if (out.readmission) out.readmission->SetTimes(times);
@@ -666,10 +665,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
 
 template <typename PoseT>
 PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>& decisions) {
-  std::set<ClosureId> rejected;
-  for (const auto& d : decisions) {
-    if (!d.accepted) rejected.insert(d.id);
-  }
+  const std::set<ClosureId> rejected = RejectedIds(decisions);
   std::erase_if(graph.constraints, [&](const Constraint<PoseT>& c) {
     return rejected.contains(c.id) || !graph.IsSwitchedOn(c);
   });
