@@ -37,6 +37,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
   j["termination"] = r.summary.IsUsable() ? "usable" : "failed";
   j["message"] = r.summary.message;
   j["iterations"] = r.summary.iterations;
+  j["settled"] = r.summary.stopped_by_test;  // ended when its decisions settled
   j["initial_cost"] = r.summary.initial_cost;
   j["final_cost"] = r.summary.final_cost;
   j["chi2"] = r.chi2;
@@ -196,6 +197,9 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_flag("--robust-odometry", o->optimizer.robust_odometry,
                 "Apply the robust method to odometry too");
+  cmd->add_flag("--no-settled-stop{false}", o->optimizer.stop_when_settled,
+                "Run the robust solve to the solver's tolerances, even though the refinement "
+                "re-solves its map once its decisions have settled");
   cmd->add_flag("--no-refine{false}", o->optimizer.refine,
                 "Keep the robust solve's poses instead of re-solving them with the rejected "
                 "closures removed and the accepted ones at full weight");

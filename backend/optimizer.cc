@@ -112,6 +112,26 @@ ceres::Problem::Options ProblemOptions() {
   return options;
 }
 
+// OptimizerOptions::stop_test as a Ceres callback; the values are current
+// because the solver updates them every iteration.
+class StopTestCallback : public ceres::IterationCallback {
+ public:
+  StopTestCallback(const OptimizerOptions& options, const Values& values)
+      : test_(options.stop_test), values_(values) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (s.iteration == 0 || !s.step_is_successful || s.cost <= 0.0) return ceres::SOLVER_CONTINUE;
+    if (!test_(values_, std::abs(s.cost_change) / s.cost)) return ceres::SOLVER_CONTINUE;
+    stopped_ = true;
+    return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+  }
+  bool stopped() const { return stopped_; }
+
+ private:
+  const std::function<bool(const Values&, double)>& test_;
+  const Values& values_;
+  bool stopped_ = false;
+};
+
 }  // namespace
 
 OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
@@ -135,6 +155,12 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
 
+  StopTestCallback stop_test(options, values);
+  if (options.stop_test) {
+    solver.update_state_every_iteration = true;
+    solver.callbacks.push_back(&stop_test);
+  }
+
   ceres::Solver::Summary ceres_summary;
   ceres::Solve(solver, &problem, &ceres_summary);
 
@@ -142,9 +168,11 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   switch (ceres_summary.termination_type) {
     case ceres::CONVERGENCE: s.termination = Termination::kConverged; break;
     case ceres::NO_CONVERGENCE: s.termination = Termination::kNoConvergence; break;
+    case ceres::USER_SUCCESS: s.termination = Termination::kConverged; break;
     default: s.termination = Termination::kFailure; break;
   }
-  s.message = ceres_summary.message;
+  s.stopped_by_test = stop_test.stopped();
+  s.message = s.stopped_by_test ? "The caller's stop test ended the solve." : ceres_summary.message;
   s.iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
   s.initial_cost = ceres_summary.initial_cost;
   s.final_cost = ceres_summary.final_cost;

@@ -3,6 +3,7 @@
 #ifndef CATGRAPH_BACKEND_OPTIMIZER_H_
 #define CATGRAPH_BACKEND_OPTIMIZER_H_
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,12 @@ struct OptimizerOptions {
   double gradient_tolerance = 1e-12;   // max-norm of the projected gradient; > 0
   double parameter_tolerance = 1e-10;  // relative step size; > 0
   int num_threads = 1;                 // Jacobian evaluation threads; >= 1
+  // A caller's test, run after every iteration that lowered the cost, on
+  // the current values and that iteration's relative decrease |dF| / F.
+  // When it returns true the solve ends there as converged (Ceres'
+  // IterationCallback returning SOLVER_TERMINATE_SUCCESSFULLY). Unset: only
+  // the tolerances and max_iterations end the solve.
+  std::function<bool(const Values& values, double relative_decrease)> stop_test;
 };
 
 // Throws std::invalid_argument naming the first bad field.
@@ -41,6 +48,7 @@ struct Summary {
   double residual_time_s = 0.0;
   int residual_blocks = 0;
   int parameter_blocks = 0;
+  bool stopped_by_test = false;  // OptimizerOptions::stop_test ended the solve
 
   // Converged, or stopped at the iteration limit with a finite cost.
   bool IsUsable() const;

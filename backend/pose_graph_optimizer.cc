@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -380,6 +382,16 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     }
   };
 
+  auto take_solution = [&](const Values& values) {
+    take_poses(values);
+    for (auto& [id, s] : graph.switches) {
+      if (!disabled_switches.contains(id) && !frozen_switches.contains(id)) s.value = values.AtSwitch(id);
+    }
+  };
+  // The robust solve's stop test (PoseGraphOptimizerOptions::stop_when_settled),
+  // set below where the decisions are defined.
+  std::function<bool(const Values&, double)> settled;
+
   // One solve of the whole graph; `gnc_weights`, when given, scales each
   // robust closure's chi2 (a zero weight leaves the closure out).
   auto solve = [&](const std::map<ClosureId, double>* gnc_weights, int max_iterations) {
@@ -414,12 +426,15 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     }
     OptimizerOptions solver = options.solver;
     solver.max_iterations = std::min(solver.max_iterations, max_iterations);
+    if (!gnc_weights) solver.stop_test = settled;
     OptimizationResult solved = Optimize(factors, initial, solver);
-    take_poses(solved.values);
-    for (auto& [id, s] : graph.switches) {
-      if (!disabled_switches.contains(id) && !frozen_switches.contains(id)) {
-        s.value = solved.values.AtSwitch(id);
-      }
+    take_solution(solved.values);
+    if (solved.summary.stopped_by_test) {
+      std::ostringstream message;
+      message << "decisions settled: none changed over the last " << options.settled_iterations
+              << " iterations, and the last lowered the cost by less than " << options.settled_decrease
+              << " (relative); the refinement re-solves the map";
+      solved.summary.message = message.str();
     }
     return solved.summary;
   };
@@ -477,6 +492,19 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     }
     return decisions;
   };
+
+  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
+  if (options.stop_when_settled && options.refine && robust_solve && options.method != RobustMethod::kGnc) {
+    settled = [&, last = std::vector<bool>{}, unchanged = 0](const Values& values,
+                                                            double decrease) mutable {
+      take_solution(values);
+      std::vector<bool> accepted;
+      for (const ClosureDecision& d : decide_all(nullptr)) accepted.push_back(d.accepted);
+      unchanged = accepted == last ? unchanged + 1 : 0;
+      last = std::move(accepted);
+      return unchanged >= options.settled_iterations && decrease < options.settled_decrease;
+    };
+  }
 
   PoseGraphOptimization out;
   out.summary = solve_robustly(gate);
@@ -577,7 +605,6 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     summary.SetTimes(times);
     return summary;
   };
-  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
   if (options.refine && robust_solve && out.summary.IsUsable()) out.refinement = refine(true);
 
   // Readmission (PoseGraphOptimizerOptions::readmit): each closure the
@@ -715,6 +742,8 @@ void Validate(const PoseGraphOptimizerOptions& o) {
     throw std::invalid_argument("narrow_max_rejected_share must be in (0, 1]");
   }
   Validate(o.noise_scale);
+  if (o.settled_iterations < 1) throw std::invalid_argument("settled_iterations must be >= 1");
+  if (!(o.settled_decrease > 0.0)) throw std::invalid_argument("settled_decrease must be > 0");
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {
     throw std::invalid_argument("loss_scale_sigma must be >= 0 (0: from the gate)");

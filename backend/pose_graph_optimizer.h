@@ -141,6 +141,17 @@ struct PoseGraphOptimizerOptions {
   // closure keeps a weight of up to 0.5 in the robust solve, and 1000 of
   // them move Manhattan's ATE from 0.79 m to 1.12 m; refined, 0.79 m.
   bool refine = true;
+  // With `refine`, the robust solve's map is replaced, and only its
+  // decisions are kept: it ends as soon as they have settled, that is when
+  // no decision has changed over the last `settled_iterations` iterations
+  // that lowered the cost and the last of them lowered it by less than
+  // `settled_decrease` (relative), instead of polishing a map the
+  // refinement re-solves (Manhattan + 1000 false closures: 16 iterations of
+  // 0.15-0.2 s, the last 10 changing the cost by 5e-4 in all and no
+  // decision). Not for GNC, whose rounds have their own schedule. Off: false.
+  bool stop_when_settled = true;
+  int settled_iterations = 2;      // >= 1
+  double settled_decrease = 1e-4;  // > 0
   // Readmission. The gate decides each closure by its own chi2, on a map
   // that false closures may still bend, and at a per-closure level: of n
   // true closures it rejects n (1 - switch_gate_probability) on average,

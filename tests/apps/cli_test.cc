@@ -159,6 +159,14 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   std::size_t readmitted = 0;
   for (const auto& c : full.at("closures")) readmitted += c.at("readmitted").get<bool>() ? 1 : 0;
   CHECK(readmitted == j.at("readmitted").get<std::size_t>());
+  // Whether the robust solve ended when its decisions settled; never with
+  // --no-settled-stop, and the decisions are the same.
+  CHECK(j.at("settled").is_boolean());
+  const Result full_solve = Run({"optimize", graph, "-o", out, "--json", "--no-settled-stop"});
+  REQUIRE(full_solve.status == 0);
+  const auto unsettled = nlohmann::json::parse(full_solve.out);
+  CHECK(unsettled.at("settled") == false);
+  CHECK(unsettled.at("accepted") == j.at("accepted"));
   // --drop-rejected writes a graph without switches.
   REQUIRE(Run({"optimize", graph, "-o", out, "--drop-rejected"}).status == 0);
   CHECK(nlohmann::json::parse(Run({"info", out, "--json"}).out).at("switches") == 0);

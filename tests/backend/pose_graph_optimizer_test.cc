@@ -97,6 +97,44 @@ TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend
   CHECK_THROWS_AS(Optimize(dangling, initial), std::invalid_argument);
 }
 
+// OptimizerOptions::stop_test: called after each iteration that lowered the
+// cost, on the current values; returning true ends the solve as converged.
+TEST_CASE("a caller's stop test ends the solve where it says, with the values it saw",
+          "[backend][api]") {
+  const std::vector<Pose2> truth = {{0, 0, 0}, {2, 0, M_PI / 2}, {2, 2, M_PI}, {0, 2, -M_PI / 2}};
+  Values initial;
+  FactorGraph graph;
+  RelativePoseMeasurement<Pose2> z;
+  for (int k = 0; k < 4; ++k) {
+    initial.Insert(PoseId(k), truth[k] * Pose2(0.3 * k, -0.2 * k, 0.2 * k));
+    z.mean = truth[k].Between(truth[(k + 1) % 4]);
+    graph.Emplace<BetweenFactor<Pose2>>(PoseId(k), PoseId((k + 1) % 4), z);
+  }
+  graph.SetConstant(PoseKey(PoseId(0)));
+  const OptimizationResult full = Optimize(graph, initial);
+  REQUIRE(full.summary.iterations >= 3);
+  OptimizerOptions options;
+  int calls = 0;
+  Pose2 seen;
+  std::vector<double> decreases;
+  options.stop_test = [&](const Values& values, double relative_decrease) {
+    seen = values.AtPose2(PoseId(2));
+    decreases.push_back(relative_decrease);
+    return ++calls == 2;
+  };
+  const OptimizationResult stopped = Optimize(graph, initial, options);
+  CHECK(calls == 2);
+  CHECK(stopped.summary.stopped_by_test);
+  CHECK(stopped.summary.termination == Termination::kConverged);
+  CHECK(stopped.summary.iterations == 2);
+  CHECK(stopped.summary.final_cost > full.summary.final_cost);
+  // The test saw the iterate the solve returned, not the initial values.
+  CHECK(testing::ApproxEqual(stopped.values.AtPose2(PoseId(2)), seen, 1e-12));
+  CHECK_FALSE(testing::ApproxEqual(initial.AtPose2(PoseId(2)), seen, 1e-3));
+  for (const double d : decreases) CHECK((d > 0.0 && std::isfinite(d)));
+  CHECK_FALSE(full.summary.stopped_by_test);
+}
+
 // Two steps from a pose held constant, both measuring no motion, linearised
 // at the identity where every Jacobian is +-I: the second pose's covariance
 // is the sum of the steps' covariances, the first's is the first step's, and
@@ -239,6 +277,55 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
     CHECK(largest_m < 1e-5);
     CHECK(Chi2(reference.graph) < Chi2(raw.graph));
   }
+}
+
+// PoseGraphOptimizerOptions::stop_when_settled: the robust solve ends once
+// its decisions settle; the refinement then gives the map the full solve
+// gives, with the same decisions. Long false closures (random policy) make
+// the full solve's late iterations the costly ones.
+TEST_CASE("the robust solve stops when its decisions settle, with the full solve's decisions and map",
+          "[backend][refine]") {
+  ManhattanWorldOptions world;
+  world.num_poses = 1000;
+  world.seed = 21;
+  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
+  OutlierOptions outliers;
+  outliers.count = 200;
+  outliers.seed = 8;
+  InjectOutliers(sim.graph, outliers);
+  for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
+    CAPTURE(ToString(method));
+    PoseGraphOptimizerOptions options;
+    options.method = method;
+    const PoseGraphOptimization settled = OptimizePoseGraph(sim.graph, options);
+    options.stop_when_settled = false;
+    const PoseGraphOptimization full = OptimizePoseGraph(sim.graph, options);
+    REQUIRE(settled.refinement);
+    REQUIRE(full.refinement);
+    CHECK(settled.summary.stopped_by_test);
+    CHECK_FALSE(full.summary.stopped_by_test);
+    CAPTURE(settled.summary.iterations, full.summary.iterations);
+    CHECK(settled.summary.iterations < full.summary.iterations);
+    REQUIRE(settled.closures.size() == full.closures.size());
+    for (std::size_t k = 0; k < full.closures.size(); ++k) {
+      CHECK(settled.closures[k].accepted == full.closures[k].accepted);
+    }
+    const auto& got = std::get<PoseGraph2>(settled.graph).vertices;
+    const auto& want = std::get<PoseGraph2>(full.graph).vertices;
+    double largest_m = 0.0;
+    for (const auto& [id, v] : want) {
+      largest_m = std::max(largest_m, (Eigen::Vector2d(v.pose->x(), v.pose->y()) -
+                                       Eigen::Vector2d(got.at(id).pose->x(), got.at(id).pose->y()))
+                                          .norm());
+    }
+    CHECK(largest_m < 1e-5);
+  }
+  PoseGraphOptimizerOptions bad;
+  bad.settled_iterations = 0;
+  CHECK_THROWS_AS(Validate(bad), std::invalid_argument);
+  bad = {};
+  bad.settled_decrease = 0.0;
+  CHECK_THROWS_AS(Validate(bad), std::invalid_argument);
 }
 
 // Readmission (PoseGraphOptimizerOptions::readmit) on a world with the
