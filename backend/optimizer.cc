@@ -2,13 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <ceres/ceres.h>
 
 namespace catgraph {
@@ -196,49 +200,90 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
 
 std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, const Values& values,
                                                       const std::vector<std::pair<Key, Key>>& pairs) {
+  // The information H = sum J^T J over the factors, in the tangent spaces of
+  // the variables not held constant; column offsets by key.
   std::set<Key> reached;
   for (const auto& factor : graph.factors()) {
     for (const Key key : factor->keys()) reached.insert(key);
   }
-  Values at = values;
-  ceres::Problem problem(ProblemOptions());
-  BuildProblem(graph, at, problem, /*losses_and_bounds=*/false, &reached);
-  auto block_of = [&](Key key) {
-    if (!reached.contains(key)) {
-      throw std::invalid_argument("JointMarginalCovariances: no factor reaches " + ToString(key));
+  std::map<Key, int> offset;
+  int n = 0;
+  for (const Key key : reached) {
+    if (!values.Contains(key)) {
+      throw std::invalid_argument("JointMarginalCovariances: no value for " + ToString(key));
     }
-    return static_cast<const double*>(at.MutableBlock(key));
-  };
-  // Ceres wants each block pair once, and only one of (a, b) and (b, a).
-  std::set<std::pair<const double*, const double*>> wanted;
+    if (graph.constant_keys().contains(key)) continue;
+    offset.emplace(key, n);
+    n += TangentSize(values.KindOf(key));
+  }
   for (const auto& [a, b] : pairs) {
-    for (const auto& [x, y] : {std::pair{a, a}, std::pair{a, b}, std::pair{b, b}}) {
-      const double *p = block_of(x), *q = block_of(y);
-      if (!wanted.contains({q, p})) wanted.insert({p, q});
+    for (const Key key : {a, b}) {
+      if (!reached.contains(key)) {
+        throw std::invalid_argument("JointMarginalCovariances: no factor reaches " + ToString(key));
+      }
     }
   }
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::SPARSE_QR;
-  covariance_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-  ceres::Covariance covariance(covariance_options);
-  const std::vector<std::pair<const double*, const double*>> blocks(wanted.begin(), wanted.end());
-  if (!covariance.Compute(blocks, &problem)) {
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (const auto& factor : graph.factors()) {
+    const std::vector<Key> keys = factor->keys();
+    const LinearizedFactor linear = Linearize(*factor, values);
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const auto row = offset.find(keys[i]);
+      if (row == offset.end()) continue;
+      for (std::size_t j = 0; j < keys.size(); ++j) {
+        const auto col = offset.find(keys[j]);
+        if (col == offset.end() || col->second > row->second) continue;  // lower triangle
+        const Eigen::MatrixXd block = linear.jacobians[i].transpose() * linear.jacobians[j];
+        for (int r = 0; r < block.rows(); ++r) {
+          for (int c = 0; c < block.cols(); ++c) {
+            if (row->second + r >= col->second + c) triplets.emplace_back(row->second + r, col->second + c, block(r, c));
+          }
+        }
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> information(n, n);
+  information.setFromTriplets(triplets.begin(), triplets.end());
+  // P H P^T = L L^T. A pivot that is a vanishing share of its diagonal
+  // entry means H is singular (a gauge freedom: nothing held constant).
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt(information);
+  bool singular = llt.info() != Eigen::Success;
+  if (!singular) {
+    const Eigen::VectorXd pivots = llt.matrixL().nestedExpression().diagonal();
+    const Eigen::VectorXd diagonal = llt.permutationP() * Eigen::VectorXd(information.diagonal());
+    for (int k = 0; k < n && !singular; ++k) singular = !(pivots(k) * pivots(k) > 1e-12 * diagonal(k));
+  }
+  if (singular) {
     throw std::runtime_error("JointMarginalCovariances: the information matrix is singular "
                              "(no variable held constant, or one the factors do not determine)");
   }
+  // The joint covariance of (a, b) is E^T H^-1 E = Y^T Y for the columns E
+  // of the identity at a and b and Y = L^-1 P E: a forward solve whose right
+  // side is sparse, so it touches only the factor's columns on the paths
+  // from a and b to the root of the elimination tree.
   std::vector<Eigen::MatrixXd> out;
   for (const auto& [a, b] : pairs) {
-    const int na = TangentSize(at.KindOf(a)), nb = TangentSize(at.KindOf(b));
-    Eigen::MatrixXd joint(na + nb, na + nb);
-    auto fill = [&](Key x, Key y, int row, int col, int rows, int cols) {
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(rows, cols);
-      covariance.GetCovarianceBlockInTangentSpace(block_of(x), block_of(y), block.data());
-      joint.block(row, col, rows, cols) = block;
-    };
-    fill(a, a, 0, 0, na, na);
-    fill(a, b, 0, na, na, nb);
-    fill(b, b, na, na, nb, nb);
-    joint.block(na, 0, nb, na) = joint.block(0, na, na, nb).transpose();
+    const int na = TangentSize(values.KindOf(a)), nb = TangentSize(values.KindOf(b));
+    Eigen::MatrixXd joint = Eigen::MatrixXd::Zero(na + nb, na + nb);
+    std::vector<Eigen::Triplet<double>> columns;
+    std::vector<int> free;  // rows of `joint` of the variables not held constant
+    for (const auto& [key, first, size] : {std::tuple{a, 0, na}, std::tuple{b, na, nb}}) {
+      const auto found = offset.find(key);
+      if (found == offset.end()) continue;  // held constant: zero covariance
+      for (int k = 0; k < size; ++k) {
+        columns.emplace_back(llt.permutationP().indices()(found->second + k), static_cast<int>(free.size()), 1.0);
+        free.push_back(first + k);
+      }
+    }
+    if (!free.empty()) {
+      Eigen::SparseMatrix<double> y(n, static_cast<int>(free.size()));
+      y.setFromTriplets(columns.begin(), columns.end());
+      llt.matrixL().solveInPlace(y);
+      const Eigen::MatrixXd cov = Eigen::MatrixXd(Eigen::SparseMatrix<double>(y.transpose() * y));
+      for (std::size_t r = 0; r < free.size(); ++r) {
+        for (std::size_t c = 0; c < free.size(); ++c) joint(free[r], free[c]) = cov(r, c);
+      }
+    }
     out.push_back(std::move(joint));
   }
   return out;

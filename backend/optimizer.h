@@ -80,10 +80,12 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
 // GTSAM's Marginals, for pairs of variables: the joint covariance of `a` and
 // `b` ([a; b] in their tangent spaces) of the Gaussian the factors define
 // when linearised at `values` (robust losses ignored). Constant variables
-// have zero covariance. Throws std::runtime_error when it does not exist
-// (the information matrix is singular: no variable held constant, a
-// variable no factor reaches); std::invalid_argument for a key that is not
-// in `values` or that no factor reaches.
+// have zero covariance; variables no factor reaches are left out. Computed
+// from one sparse Cholesky factorisation of the information sum J^T J and a
+// sparse forward solve per pair. Throws std::runtime_error when it does not
+// exist (the information matrix is singular: no variable held constant, or
+// one the factors do not determine); std::invalid_argument for a key that
+// is not in `values` or that no factor reaches.
 std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, const Values& values,
                                                       const std::vector<std::pair<Key, Key>>& pairs);
 

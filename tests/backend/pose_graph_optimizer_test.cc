@@ -185,6 +185,71 @@ TEST_CASE("joint marginal covariances of a chain sum its steps' covariances, 2D 
   CheckChainMarginals<Pose3, 6>();
 }
 
+// A loop of 3D poses away from their optimum (so no Jacobian is +-I), with
+// non-diagonal information, one pose held constant: the sparse marginals
+// equal the blocks of the dense inverse of the information sum J^T J
+// assembled from each factor's linearisation (Linearize, itself checked
+// against the chain above).
+TEST_CASE("joint marginal covariances equal the dense inverse of the information on a loop",
+          "[backend][api][marginals]") {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  constexpr int kPoses = 7;
+  Values values;
+  FactorGraph graph;
+  for (int k = 0; k < kPoses; ++k) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(noise(rng), noise(rng), 1.0).normalized();
+    values.Insert(PoseId(k), Pose3(Eigen::Vector3d(3.0 * std::cos(k), 3.0 * std::sin(k), noise(rng)),
+                                   Eigen::Quaterniond(Eigen::AngleAxisd(0.9 * k + noise(rng), axis))));
+  }
+  RelativePoseMeasurement<Pose3> z;
+  for (int k = 0; k < kPoses; ++k) {
+    const Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Random();
+    z.information = a * a.transpose() + Eigen::Matrix<double, 6, 6>::Identity();
+    z.mean = Pose3(Eigen::Vector3d(noise(rng), 1.0, noise(rng)),
+                   Eigen::Quaterniond(Eigen::AngleAxisd(0.9, Eigen::Vector3d::UnitZ())));
+    graph.Emplace<BetweenFactor<Pose3>>(PoseId(k), PoseId((k + 1) % kPoses), z);
+    if (k % 3 == 0) graph.Emplace<BetweenFactor<Pose3>>(PoseId(k), PoseId((k + 3) % kPoses), z);
+  }
+  graph.SetConstant(PoseKey(PoseId(2)));
+  // Dense H over poses 0..6 but 2, 6 columns each.
+  auto column = [](int k) { return 6 * (k < 2 ? k : k - 1); };
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(6 * (kPoses - 1), 6 * (kPoses - 1));
+  for (const auto& factor : graph.factors()) {
+    const LinearizedFactor linear = Linearize(*factor, values);
+    const std::vector<Key> keys = factor->keys();
+    for (int i = 0; i < 2; ++i) {
+      for (int j = 0; j < 2; ++j) {
+        const int ki = static_cast<int>(keys[i].id), kj = static_cast<int>(keys[j].id);
+        if (ki == 2 || kj == 2) continue;
+        information.block<6, 6>(column(ki), column(kj)) += linear.jacobians[i].transpose() * linear.jacobians[j];
+      }
+    }
+  }
+  const Eigen::MatrixXd covariance = information.inverse();
+  const std::vector<std::pair<int, int>> wanted = {{0, 4}, {5, 1}, {3, 3}, {2, 6}};
+  std::vector<std::pair<Key, Key>> pairs;
+  for (const auto& [a, b] : wanted) pairs.emplace_back(PoseKey(PoseId(a)), PoseKey(PoseId(b)));
+  const std::vector<Eigen::MatrixXd> joint = JointMarginalCovariances(graph, values, pairs);
+  REQUIRE(joint.size() == wanted.size());
+  for (std::size_t p = 0; p < wanted.size(); ++p) {
+    const auto [a, b] = wanted[p];
+    CAPTURE(a, b);
+    REQUIRE(joint[p].rows() == 12);
+    for (const auto& [x, row] : {std::pair{a, 0}, std::pair{b, 6}}) {
+      for (const auto& [y, col] : {std::pair{a, 0}, std::pair{b, 6}}) {
+        const Eigen::MatrixXd got = joint[p].block<6, 6>(row, col);
+        if (x == 2 || y == 2) {
+          CHECK(got.norm() == 0.0);  // held constant
+          continue;
+        }
+        const Eigen::MatrixXd want = covariance.block<6, 6>(column(x), column(y));
+        CHECK((got - want).norm() < 1e-9 * want.norm());
+      }
+    }
+  }
+}
+
 TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][init]") {
   ManhattanWorldOptions options;
   options.num_poses = 200;
