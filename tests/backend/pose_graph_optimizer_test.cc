@@ -20,6 +20,38 @@
 namespace catgraph {
 namespace {
 
+// A simulated Manhattan world with `count` false closures injected by
+// `policy`; the ids of the injected ones.
+struct SpoiledWorld {
+  SimulatedPoseGraph2 sim;
+  std::set<ClosureId> injected;
+};
+SpoiledWorld SpoiledManhattanWorld(int poses, std::uint64_t world_seed, int count, std::uint64_t outlier_seed,
+                                   OutlierPolicy policy = OutlierPolicy::kRandom) {
+  ManhattanWorldOptions world;
+  world.num_poses = poses;
+  world.seed = world_seed;
+  SpoiledWorld out{SimulateManhattanWorld(world), {}};
+  OutlierOptions outliers;
+  outliers.count = count;
+  outliers.seed = outlier_seed;
+  outliers.policy = policy;
+  for (const InjectedClosure& c : InjectOutliers(out.sim.graph, outliers)) out.injected.insert(c.id);
+  return out;
+}
+
+// The largest distance between a pose's positions in two solutions.
+double LargestPositionDifference(const AnyPoseGraph& a, const AnyPoseGraph& b) {
+  const auto& got = std::get<PoseGraph2>(a).vertices;
+  double largest_m = 0.0;
+  for (const auto& [id, v] : std::get<PoseGraph2>(b).vertices) {
+    largest_m = std::max(largest_m, (Eigen::Vector2d(v.pose->x(), v.pose->y()) -
+                                     Eigen::Vector2d(got.at(id).pose->x(), got.at(id).pose->y()))
+                                        .norm());
+  }
+  return largest_m;
+}
+
 TEST_CASE("chi-square quantiles match the tables", "[backend][chi2]") {
   CHECK(ChiSquareQuantile(3, 0.99) == Approx(11.3449).epsilon(1e-5));
   CHECK(ChiSquareQuantile(3, 0.999) == Approx(16.2662).epsilon(1e-5));
@@ -266,15 +298,7 @@ TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][ini
 TEST_CASE("switchable constraints with the default gate reject injected closures and keep "
           "true ones on a graph with correct information",
           "[backend][switchable]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 1000;
-  world.seed = 9;
-  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  OutlierOptions outliers;
-  outliers.count = 50;
-  outliers.seed = 3;
-  std::set<ClosureId> injected;
-  for (const InjectedClosure& c : InjectOutliers(sim.graph, outliers)) injected.insert(c.id);
+  const auto [sim, injected] = SpoiledManhattanWorld(1000, 9, 50, 3);
   std::size_t true_closures = 0;
   // The gate is chi2's quantile for g2o's cost, the chordal cost's own
   // (ChordalCostQuantile) for SE-Sync's.
@@ -302,14 +326,7 @@ TEST_CASE("switchable constraints with the default gate reject injected closures
 
 TEST_CASE("refinement gives the plain optimum of the graph without the rejected closures",
           "[backend][refine]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 400;
-  world.seed = 12;
-  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  OutlierOptions outliers;
-  outliers.count = 60;
-  outliers.seed = 5;
-  InjectOutliers(sim.graph, outliers);
+  const SimulatedPoseGraph2 sim = SpoiledManhattanWorld(400, 12, 60, 5).sim;
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
     PoseGraphOptimizerOptions options;
     options.method = method;
@@ -330,16 +347,8 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
     plain.method = RobustMethod::kNone;
     const PoseGraphOptimization reference =
         OptimizePoseGraph(DropRejected(raw.graph, raw.closures), plain);
-    const auto& got = std::get<PoseGraph2>(refined.graph).vertices;
-    const auto& want = std::get<PoseGraph2>(reference.graph).vertices;
-    double largest_m = 0.0;
-    for (const auto& [id, v] : want) {
-      largest_m = std::max(largest_m, (Eigen::Vector2d(v.pose->x(), v.pose->y()) -
-                                       Eigen::Vector2d(got.at(id).pose->x(), got.at(id).pose->y()))
-                                          .norm());
-    }
     CAPTURE(ToString(method));
-    CHECK(largest_m < 1e-5);
+    CHECK(LargestPositionDifference(refined.graph, reference.graph) < 1e-5);
     CHECK(Chi2(reference.graph) < Chi2(raw.graph));
   }
 }
@@ -350,14 +359,7 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
 // the full solve's late iterations the costly ones.
 TEST_CASE("the robust solve stops when its decisions settle, with the full solve's decisions and map",
           "[backend][refine]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 1000;
-  world.seed = 21;
-  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  OutlierOptions outliers;
-  outliers.count = 200;
-  outliers.seed = 8;
-  InjectOutliers(sim.graph, outliers);
+  const SimulatedPoseGraph2 sim = SpoiledManhattanWorld(1000, 21, 200, 8).sim;
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
     CAPTURE(ToString(method));
     PoseGraphOptimizerOptions options;
@@ -375,15 +377,7 @@ TEST_CASE("the robust solve stops when its decisions settle, with the full solve
     for (std::size_t k = 0; k < full.closures.size(); ++k) {
       CHECK(settled.closures[k].accepted == full.closures[k].accepted);
     }
-    const auto& got = std::get<PoseGraph2>(settled.graph).vertices;
-    const auto& want = std::get<PoseGraph2>(full.graph).vertices;
-    double largest_m = 0.0;
-    for (const auto& [id, v] : want) {
-      largest_m = std::max(largest_m, (Eigen::Vector2d(v.pose->x(), v.pose->y()) -
-                                       Eigen::Vector2d(got.at(id).pose->x(), got.at(id).pose->y()))
-                                          .norm());
-    }
-    CHECK(largest_m < 1e-5);
+    CHECK(LargestPositionDifference(settled.graph, full.graph) < 1e-5);
   }
   PoseGraphOptimizerOptions bad;
   bad.settled_iterations = 0;
@@ -398,16 +392,7 @@ TEST_CASE("the robust solve stops when its decisions settle, with the full solve
 // injected ones stay out, for every method deciding at the gate.
 TEST_CASE("readmission brings back the true closures the gate rejected and no false one",
           "[backend][readmit]") {
-  ManhattanWorldOptions world;
-  world.num_poses = 800;
-  world.seed = 4;
-  SimulatedPoseGraph2 sim = SimulateManhattanWorld(world);
-  OutlierOptions outliers;
-  outliers.count = 50;
-  outliers.seed = 6;
-  outliers.policy = OutlierPolicy::kLocal;
-  std::set<ClosureId> injected;
-  for (const InjectedClosure& c : InjectOutliers(sim.graph, outliers)) injected.insert(c.id);
+  const auto [sim, injected] = SpoiledManhattanWorld(800, 4, 50, 6, OutlierPolicy::kLocal);
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs, RobustMethod::kGnc}) {
     CAPTURE(ToString(method));
     PoseGraphOptimizerOptions options;
