@@ -236,7 +236,8 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
         const Eigen::MatrixXd block = linear.jacobians[i].transpose() * linear.jacobians[j];
         for (int r = 0; r < block.rows(); ++r) {
           for (int c = 0; c < block.cols(); ++c) {
-            if (row->second + r >= col->second + c) triplets.emplace_back(row->second + r, col->second + c, block(r, c));
+            const int at_row = row->second + r, at_col = col->second + c;
+            if (at_row >= at_col) triplets.emplace_back(at_row, at_col, block(r, c));
           }
         }
       }
@@ -271,7 +272,8 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
       const auto found = offset.find(key);
       if (found == offset.end()) continue;  // held constant: zero covariance
       for (int k = 0; k < size; ++k) {
-        columns.emplace_back(llt.permutationP().indices()(found->second + k), static_cast<int>(free.size()), 1.0);
+        const int permuted = llt.permutationP().indices()(found->second + k);
+        columns.emplace_back(permuted, static_cast<int>(free.size()), 1.0);
         free.push_back(first + k);
       }
     }

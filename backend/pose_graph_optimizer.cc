@@ -493,6 +493,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     return decisions;
   };
 
+  // Each solve runs its own copy of the test, which starts with no history.
   const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
   if (options.stop_when_settled && options.refine && robust_solve && options.method != RobustMethod::kGnc) {
     settled = [&, last = std::vector<bool>{}, unchanged = 0](const Values& values,

@@ -254,7 +254,8 @@ TEST_CASE("joint marginal covariances equal the dense inverse of the information
       for (int j = 0; j < 2; ++j) {
         const int ki = static_cast<int>(keys[i].id), kj = static_cast<int>(keys[j].id);
         if (ki == 2 || kj == 2) continue;
-        information.block<6, 6>(column(ki), column(kj)) += linear.jacobians[i].transpose() * linear.jacobians[j];
+        information.block<6, 6>(column(ki), column(kj)) +=
+            linear.jacobians[i].transpose() * linear.jacobians[j];
       }
     }
   }
