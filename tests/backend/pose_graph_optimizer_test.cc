@@ -26,8 +26,8 @@ struct SpoiledWorld {
   SimulatedPoseGraph2 sim;
   std::set<ClosureId> injected;
 };
-SpoiledWorld SpoiledManhattanWorld(int poses, std::uint64_t world_seed, int count, std::uint64_t outlier_seed,
-                                   OutlierPolicy policy = OutlierPolicy::kRandom) {
+SpoiledWorld SpoiledManhattanWorld(int poses, std::uint64_t world_seed, int count,
+                                   std::uint64_t outlier_seed, OutlierPolicy policy = OutlierPolicy::kRandom) {
   ManhattanWorldOptions world;
   world.num_poses = poses;
   world.seed = world_seed;
