@@ -68,13 +68,9 @@ using Pose3Manifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres:
 int TangentSize(VariableKind kind) { return kind == VariableKind::kPose3 ? 6 : Values::BlockSize(kind); }
 
 // The factors over `values`' blocks as a ceres::Problem (which keeps
-// pointers into `values`). Robust losses and bounds only with
-// `losses_and_bounds`: a marginal is of the Gaussian, which has neither.
-// With `only`, the other values are left out.
-void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem, bool losses_and_bounds,
-                  const std::set<Key>* only = nullptr) {
+// pointers into `values`), with their robust losses and bounds.
+void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem) {
   for (const Key key : values.keys()) {
-    if (only && !only->contains(key)) continue;
     const VariableKind kind = values.KindOf(key);
     double* block = values.MutableBlock(key);
     if (kind == VariableKind::kPose3) {
@@ -92,9 +88,7 @@ void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& prob
       }
       blocks.push_back(values.MutableBlock(key));
     }
-    problem.AddResidualBlock(factor->NewCostFunction().release(),
-                             losses_and_bounds ? factor->NewLossFunction().release() : nullptr, blocks);
-    if (!losses_and_bounds) continue;
+    problem.AddResidualBlock(factor->NewCostFunction().release(), factor->NewLossFunction().release(), blocks);
     for (const ParameterBound& b : factor->bounds()) {
       double* block = values.MutableBlock(b.key);
       problem.SetParameterLowerBound(block, b.index, b.lower);
@@ -102,9 +96,7 @@ void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& prob
     }
   }
   for (const Key key : graph.constant_keys()) {
-    if (values.Contains(key) && problem.HasParameterBlock(values.MutableBlock(key))) {
-      problem.SetParameterBlockConstant(values.MutableBlock(key));
-    }
+    if (values.Contains(key)) problem.SetParameterBlockConstant(values.MutableBlock(key));
   }
 }
 
@@ -144,7 +136,7 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   OptimizationResult result{initial, {}};
   Values& values = result.values;
   ceres::Problem problem(ProblemOptions());
-  BuildProblem(graph, values, problem, /*losses_and_bounds=*/true);
+  BuildProblem(graph, values, problem);
 
   ceres::Solver::Options solver;
   solver.minimizer_type = ceres::TRUST_REGION;
