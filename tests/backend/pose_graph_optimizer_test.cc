@@ -103,19 +103,30 @@ TEST_CASE("the DCS loss is continuous, its derivative is DCS's squared weight", 
   }
 }
 
-TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend][api]") {
-  // Four poses around a 2 m square; exact measurements, perturbed start.
-  const std::vector<Pose2> truth = {{0, 0, 0}, {2, 0, M_PI / 2}, {2, 2, M_PI}, {0, 2, -M_PI / 2}};
+// Four poses around a 2 m square, exact measurements with `information`,
+// pose k started at truth[k] * Pose2(k * step), pose 0 held constant.
+struct SquareLoop {
+  std::vector<Pose2> truth = {{0, 0, 0}, {2, 0, M_PI / 2}, {2, 2, M_PI}, {0, 2, -M_PI / 2}};
   Values initial;
   FactorGraph graph;
   RelativePoseMeasurement<Pose2> z;
-  z.information << 10, 2, 0, 2, 10, 1, 0, 1, 50;
+};
+SquareLoop MakeSquareLoop(const Eigen::Vector3d& step, const Eigen::Matrix3d& information) {
+  SquareLoop loop;
+  loop.z.information = information;
   for (int k = 0; k < 4; ++k) {
-    initial.Insert(PoseId(k), truth[k] * Pose2(0.2 * k, -0.1 * k, 0.1 * k));
-    z.mean = truth[k].Between(truth[(k + 1) % 4]);
-    graph.Emplace<BetweenFactor<Pose2>>(PoseId(k), PoseId((k + 1) % 4), z);
+    loop.initial.Insert(PoseId(k), loop.truth[k] * Pose2(k * step.x(), k * step.y(), k * step.z()));
+    loop.z.mean = loop.truth[k].Between(loop.truth[(k + 1) % 4]);
+    loop.graph.Emplace<BetweenFactor<Pose2>>(PoseId(k), PoseId((k + 1) % 4), loop.z);
   }
-  graph.SetConstant(PoseKey(PoseId(0)));
+  loop.graph.SetConstant(PoseKey(PoseId(0)));
+  return loop;
+}
+
+TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend][api]") {
+  Eigen::Matrix3d information;
+  information << 10, 2, 0, 2, 10, 1, 0, 1, 50;
+  const auto [truth, initial, graph, z] = MakeSquareLoop({0.2, -0.1, 0.1}, information);
   const OptimizationResult result = Optimize(graph, initial);
   REQUIRE(result.summary.IsUsable());
   CHECK(result.summary.final_cost < 1e-12);
@@ -133,16 +144,9 @@ TEST_CASE("a factor graph built in code solves a square loop exactly", "[backend
 // cost, on the current values; returning true ends the solve as converged.
 TEST_CASE("a caller's stop test ends the solve where it says, with the values it saw",
           "[backend][api]") {
-  const std::vector<Pose2> truth = {{0, 0, 0}, {2, 0, M_PI / 2}, {2, 2, M_PI}, {0, 2, -M_PI / 2}};
-  Values initial;
-  FactorGraph graph;
-  RelativePoseMeasurement<Pose2> z;
-  for (int k = 0; k < 4; ++k) {
-    initial.Insert(PoseId(k), truth[k] * Pose2(0.3 * k, -0.2 * k, 0.2 * k));
-    z.mean = truth[k].Between(truth[(k + 1) % 4]);
-    graph.Emplace<BetweenFactor<Pose2>>(PoseId(k), PoseId((k + 1) % 4), z);
-  }
-  graph.SetConstant(PoseKey(PoseId(0)));
+  const SquareLoop loop = MakeSquareLoop({0.3, -0.2, 0.2}, Eigen::Matrix3d::Identity());
+  const Values& initial = loop.initial;
+  const FactorGraph& graph = loop.graph;
   const OptimizationResult full = Optimize(graph, initial);
   REQUIRE(full.summary.iterations >= 3);
   OptimizerOptions options;
