@@ -25,6 +25,7 @@ void AddPlotDatasetCommand(CLI::App& app, std::ostream& out);
 void AddVocabularyCommand(CLI::App& app, std::ostream& out);
 void AddLocalizeCommand(CLI::App& app, std::ostream& out);
 void AddInferenceSweepCommand(CLI::App& app, std::ostream& out);
+void AddEvidenceCommand(CLI::App& app, std::ostream& out);
 void AddSadMatchCommand(CLI::App& app, std::ostream& out);
 void AddMapCommand(CLI::App& app, std::ostream& out);
 void AddDemoCommand(CLI::App& app, std::ostream& out);

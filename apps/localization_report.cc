@@ -279,6 +279,10 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-offset", f.new_place_log_offset,
                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
       ->capture_default_str();
+  cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
+                 "Also added to log p(z | new place): this fraction of the frame's self-evidence (how much better "
+                 "than the mean field a node with exactly its words explains it)")
+      ->capture_default_str();
   cmd.add_option_function<std::string>(
          "--new-place-motion", [&f](const std::string& name) { f.new_place_motion = *NewPlaceMotionFromString(name); },
          "How new place weighs the odometry against its mean: noise (the filter's Q, the spec) or spread (the "

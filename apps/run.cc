@@ -28,6 +28,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddVocabularyCommand(app, out);
   AddLocalizeCommand(app, out);
   AddInferenceSweepCommand(app, out);
+  AddEvidenceCommand(app, out);
   AddSadMatchCommand(app, out);
   AddMapCommand(app, out);
   AddDemoCommand(app, out);

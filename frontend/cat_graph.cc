@@ -71,6 +71,9 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
   if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
+  if (!(o.new_place_relative_offset >= 0.0 && o.new_place_relative_offset < 1.0)) {
+    fail("new_place_relative_offset must be in [0, 1)");
+  }
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
@@ -384,6 +387,10 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
                                              : log_mixture - likelihood.LogNewPlaceLikelihood();
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
+  if (options_.new_place_relative_offset > 0.0) {
+    log_new += options_.new_place_relative_offset *
+               (likelihood.LogLikelihood(words) - likelihood.LogNewPlaceLikelihood());
+  }
   if (!restart) {
     // Welford's running mean and spread of the odometry.
     ++u_count_;

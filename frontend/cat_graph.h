@@ -87,6 +87,12 @@ struct CatGraphOptions {
   // corridor, which share its far view. Nats; chosen for 500-word SIFT
   // vocabularies (docs/frontend.md); 0 is the spec as written.
   double new_place_log_offset = 45.0;
+  // Added to the offset: this fraction of the frame's self-evidence, how much
+  // better than the mean field a node that saw exactly the frame's words
+  // would explain it [D, docs/frontend.md]. A frame with few words cannot
+  // score many nats anywhere, the true place included. [0, 1); 0: the
+  // constant offset alone.
+  double new_place_relative_offset = 0.0;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   double exclusion_window_s = 10.0;        // nodes younger than this ...
   double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible

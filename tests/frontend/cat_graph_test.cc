@@ -133,6 +133,53 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
   CHECK(worst_error <= 1.0);
 }
 
+// The relative offset adds c times the frame's self-evidence (how much
+// better than the mean field a node with exactly its words explains it) to
+// log p(z | new place): at the first frame with particles on the map, c
+// gives what a constant offset of c · self-evidence gives. The filters agree
+// until then (no particles, new place certain), so the states are the same.
+TEST_CASE("the relative new-place offset is c times the frame's self-evidence", "[frontend][catgraph]") {
+  RingWorld world;
+  const std::vector<WordSet> training = world.Lap();
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
+  std::vector<WordSet> frames;
+  for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
+  // The first step on the map, as seen by a filter with these offsets.
+  auto first_on_map = [&](double constant, double relative, int stop_at) {
+    CatGraphOptions options;
+    options.num_particles = 200;
+    options.odometric_gate = false;
+    options.new_place_log_offset = constant;
+    options.new_place_relative_offset = relative;
+    CatGraphFilter filter(model, options);
+    for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
+      const CatGraphStep step = filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), frames[k]);
+      if (k == stop_at || (stop_at < 0 && !std::isnan(step.log_evidence))) return std::make_pair(k, step);
+    }
+    FAIL("no particle reached the map");
+    return std::make_pair(-1, CatGraphStep{});
+  };
+  constexpr double kRelative = 0.25;
+  const auto [k, relative] = first_on_map(0.0, kRelative, -1);
+  const FrameLikelihood likelihood = model.ForFrame(frames[k]);
+  const double self_evidence = likelihood.LogLikelihood(frames[k]) - likelihood.LogNewPlaceLikelihood();
+  REQUIRE(self_evidence > 4.0);  // a frame with words scores well above the mean field against itself
+  const auto [k_constant, constant] = first_on_map(kRelative * self_evidence, 0.0, k);
+  const auto [k_none, none] = first_on_map(0.0, 0.0, k);
+  REQUIRE(k_constant == k);
+  REQUIRE(k_none == k);
+  CHECK(relative.new_place_probability == Approx(constant.new_place_probability).epsilon(1e-9));
+  CHECK(relative.best.value == Approx(constant.best.value).epsilon(1e-9));
+  // The offset did something: without it new place holds less.
+  const double odds = relative.new_place_probability / (1.0 - relative.new_place_probability);
+  const double odds_none = none.new_place_probability / (1.0 - none.new_place_probability);
+  CHECK(std::log(odds) - std::log(odds_none) == Approx(kRelative * self_evidence).epsilon(1e-6));
+
+  CatGraphOptions bad;
+  bad.new_place_relative_offset = 1.0;
+  CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_relative_offset"));
+}
+
 // Two laps of the ring; on the second, the stretch [10 m, 16 m) looks new
 // (words no training image has), as a refurnished corridor does.
 struct ChangedRingRun {
@@ -359,6 +406,7 @@ TEST_CASE("A gap between frames restarts the particles instead of weighing the m
     CatGraphOptions options;
     options.num_particles = 200;
     options.new_place_log_offset = 0.0;
+    options.new_place_motion = NewPlaceMotion::kFilterNoise;  // the premise below: Eq 6 weighed by Q
     options.sequence_break_s = sequence_break_s;
     CatGraphFilter filter(model, options);
     const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
