@@ -12,6 +12,14 @@ void MaxInto(double& best, double value) { best = std::isnan(best) ? value : std
 
 }  // namespace
 
+void Validate(const EvidenceOptions& o) {
+  if (!(o.true_radius_m > 0.0 && o.true_radius_m <= o.near_min_m && o.near_min_m < o.near_max_m &&
+        o.max_heading_rad >= 0.0)) {
+    throw std::invalid_argument(
+        "EvidenceOptions: expected 0 < true_radius_m <= near_min_m < near_max_m and max_heading_rad >= 0");
+  }
+}
+
 std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::vector<WordSet>& words,
                                            const std::vector<Pose2>& truth, const std::vector<bool>& changed,
                                            const std::vector<int>& map_frames, const std::vector<int>& query_frames,
@@ -19,10 +27,7 @@ std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::
   if (words.size() != truth.size() || (!changed.empty() && changed.size() != words.size())) {
     throw std::invalid_argument("MeasureEvidence: words, truth and changed must have one entry per frame");
   }
-  if (!(o.true_radius_m > 0.0 && o.true_radius_m <= o.near_min_m && o.near_min_m < o.near_max_m &&
-        o.max_heading_rad >= 0.0)) {
-    throw std::invalid_argument("MeasureEvidence: expected 0 < true_radius <= near_min < near_max, max_heading >= 0");
-  }
+  Validate(o);
   const auto check = [&](int frame) {
     if (frame < 0 || static_cast<std::size_t>(frame) >= words.size()) {
       throw std::invalid_argument("MeasureEvidence: frame " + std::to_string(frame) + " out of range");

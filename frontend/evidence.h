@@ -32,6 +32,10 @@ struct EvidenceOptions {
   double max_heading_rad = std::numbers::pi / 4;   // map frames facing farther away are left out; >= 0
 };
 
+// Throws std::invalid_argument unless 0 < true_radius_m <= near_min_m <
+// near_max_m and max_heading_rad >= 0.
+void Validate(const EvidenceOptions& options);
+
 struct FrameEvidence {
   int frame = -1;
   std::size_t words = 0;
