@@ -388,8 +388,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
   if (options_.new_place_relative_offset > 0.0) {
-    log_new += options_.new_place_relative_offset *
-               (likelihood.LogLikelihood(words) - likelihood.LogNewPlaceLikelihood());
+    log_new += options_.new_place_relative_offset * likelihood.SelfEvidence(words);
   }
   if (!restart) {
     // Welford's running mean and spread of the odometry.

@@ -45,7 +45,7 @@ std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::
     e.frame = q;
     e.words = words[k].size();
     e.changed = !changed.empty() && changed[k];
-    e.self = likelihood.LogLikelihood(words[k]) - mean_field;
+    e.self = likelihood.SelfEvidence(words[k]);
     for (const int m : map_frames) {
       const auto j = static_cast<std::size_t>(m);
       if (std::abs(WrapAngle(truth[j].theta() - truth[k].theta())) > o.max_heading_rad) continue;

@@ -112,6 +112,10 @@ class FrameLikelihood {
   // The new-place likelihood log p(z | z_avg) of the model's NewPlaceModel
   // (spec §2.7).
   double LogNewPlaceLikelihood() const { return new_place_; }
+  // The frame's self-evidence, given its own words `z`: how much better than
+  // the new place a node that saw exactly z explains it, in nats; about the
+  // most any place can score (docs/frontend.md).
+  double SelfEvidence(const WordSet& z) const { return LogLikelihood(z) - new_place_; }
 
  private:
   friend class FabMapModel;
