@@ -4,6 +4,7 @@
 #include <functional>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -62,8 +63,9 @@ void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
   for (const double r : o.relative) {
     if (!(r >= 0.0 && r < 1.0)) throw std::invalid_argument("--relative: expected values in [0, 1)");
   }
-  const EvidenceOptions& bands = o.evidence;
-  if (!(bands.true_radius_m > 0.0 && bands.true_radius_m <= bands.near_min_m && bands.near_min_m < bands.near_max_m)) {
+  try {
+    Validate(o.evidence);  // before the features are extracted
+  } catch (const std::invalid_argument&) {
     throw std::invalid_argument("--true-radius, --near-min, --near-max: expected 0 < true radius <= near min < near max");
   }
   const FrontEndInputs in = PrepareFrontEnd(d, o.base, out);
