@@ -411,8 +411,8 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
     CHECK(plus.frames[k].best.value == alone.frames[k].best.value);
   }
 
-  // The paper's claim, "identical in a static environment", with the new
-  // place offset relative to each frame's self-evidence (docs/frontend.md
+  // The paper's claim, "identical in a static environment", with the
+  // new-place offset relative to each frame's self-evidence (docs/frontend.md
   // "A relative new-place offset"): CAT-Graph closes traversal 2 all but
   // in full, none wrong, and CAT-Graph+ adds nothing. Measured for filter
   // seed 1 (the default); seeds 3-5 add 1-3 inferences at one corner.
