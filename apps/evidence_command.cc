@@ -10,7 +10,6 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
-#include "apps/map_outcome.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
@@ -69,11 +68,9 @@ void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
     throw std::invalid_argument("--true-radius, --near-min, --near-max: expected 0 < true radius <= near min < near max");
   }
   const FrontEndInputs in = PrepareFrontEnd(d, o.base, out);
-  const Trajectory2 truth_by_id = TruthAtFrames(d);
-  std::vector<Pose2> truth;
+  const std::vector<Pose2> truth = PosesAtFrames(d, d.ground_truth);
   std::vector<bool> changed;
   std::vector<int> map_frames, query_frames;
-  for (const auto& [id, pose] : truth_by_id) truth.push_back(pose);
   for (std::size_t i = 0; i < d.frames.size(); ++i) {
     changed.push_back(d.frames[i].changed);
     (d.frames[i].traversal == traversals.front() ? map_frames : query_frames).push_back(static_cast<int>(i));
@@ -129,11 +126,7 @@ void AddEvidenceCommand(CLI::App& app, std::ostream& out) {
       "--new-place-offset and --new-place-relative-offset: docs/frontend.md.");
   cmd->add_option("dataset", o->base.dataset, "Dataset directory (with ground truth and two traversals)")->required();
   cmd->add_option("-o,--output", o->base.output, "Output directory")->required();
-  cmd->add_option("--vocabulary", o->base.vocabulary, "Vocabulary file (default: trained on the first traversal)");
-  cmd->add_option("--words", o->base.words, "Words of the default vocabulary")->capture_default_str();
-  cmd->add_option("--train-every", o->base.train_every,
-                  "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
-      ->capture_default_str();
+  AddVocabularyOptions(*cmd, o->base);
   cmd->add_option("--offsets", o->offsets, "Constant offsets of the grid (nats)")->delimiter(',')->capture_default_str();
   cmd->add_option("--relative", o->relative, "Relative offsets of the grid (fractions of the self-evidence)")
       ->delimiter(',')

@@ -263,13 +263,17 @@ void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o) {
       ->capture_default_str();
 }
 
-void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
-  CatGraphOptions& f = o.localization.filter;
+void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--vocabulary", o.vocabulary,
                  "Vocabulary file (catgraph vocabulary train); default: train one on the first traversal");
   cmd.add_option("--words", o.words, "Words of the default vocabulary")->capture_default_str();
   cmd.add_option("--train-every", o.train_every, "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
       ->capture_default_str();
+}
+
+void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
+  CatGraphOptions& f = o.localization.filter;
+  AddVocabularyOptions(cmd, o);
   cmd.add_option("--particles", f.num_particles, "n_p")->capture_default_str();
   cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();

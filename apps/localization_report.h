@@ -27,6 +27,8 @@ struct LocalizeCommandOptions {
   bool quiet = false;
 };
 
+// The vocabulary options (--vocabulary, --words, --train-every) on `cmd`.
+void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o);
 // The vocabulary and filter options of `localize` (and `map`) on `cmd`.
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o);
 
