@@ -428,7 +428,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const int previous = first ? -1 : static_cast<int>(graph_.nodes().size()) - 1;
   step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, words);
   if (previous >= 0) graph_.AddEdge(previous, step.node, u, EdgeType::kOdometry);
-  const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold;
+  // A forward camera facing against the matched nodes saw none of what they
+  // saw: its particles carry no visual evidence (the mean field above), only
+  // the odometry's, and their hypothesis is no visual closure.
+  const bool seen = !(options_.forward_camera && step.best.direction < 0);
+  const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold && seen;
   if (aliasing.false_match >= 0 || (confident && !aliasing.withhold_closure)) {
     step.closure = true;
     std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);

@@ -110,7 +110,9 @@ struct CatGraphOptions {
   int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1
   // The camera sees one way (the paper's forward patch), so particles facing
   // against the nodes' headings get FAB-MAP's mean-field likelihood, not the
-  // nodes'; false for a panoramic camera (spec Eq 2 as written).
+  // nodes', and a hypothesis facing against them is no visual closure: the
+  // camera cannot have recognised what it did not see [D, docs/frontend.md].
+  // False for a panoramic camera (spec Eq 2 as written).
   bool forward_camera = true;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
 

@@ -75,12 +75,13 @@ case "$mode" in
     echo "setup: the suite again under AddressSanitizer + UndefinedBehaviorSanitizer (clang)"
     configure_and_build "$build_dir-sanitize" -DCMAKE_CXX_COMPILER=clang++-14 -DCATGRAPH_FUZZ=ON \
       -DCATGRAPH_BUILD_BENCH=OFF
-    # All but the two tests that map the full-size office (3049 frames; a
-    # quarter of an hour under the sanitizers): the test of the same commands
-    # on the short office takes their place (tests/apps/cli_test.cc).
+    # All but the three tests that localise on a full-size office (about
+    # 3000 frames; a quarter of an hour each under the sanitizers): the test
+    # of the same commands on the short office takes their place
+    # (tests/apps/cli_test.cc).
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       ctest --test-dir "$build_dir-sanitize" -j "$jobs" --output-on-failure \
-        -E '^(demo on office-change|office-static): '
+        -E '^(demo on office-change|office-static|office-split): '
     # A fixed seed, so that a run's verdict does not depend on luck.
     echo "setup: every fuzz target for 60 s"
     FUZZ_BUILD_DIR="$build_dir-sanitize" FUZZ_SEED=1 bash "$root/scripts/fuzz.sh" 60

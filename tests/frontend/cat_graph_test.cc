@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tests/catch.h"
@@ -131,6 +132,61 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
   CHECK(first_lap_closures == 0);
   CHECK(second_lap_closures >= 0.6 * second_lap_frames);
   CHECK(worst_error <= 1.0);
+}
+
+// A lap and a half of the ring, a U-turn, then the ring driven the other
+// way, where the forward camera sees none of the words the map's camera saw
+// (an empty frame: every word absent). The particles follow the robot
+// round, turned against the nodes, on the odometry alone; their hypothesis
+// is no visual closure.
+TEST_CASE("A forward camera turned against the map makes no visual closure while the particles track it",
+          "[frontend][catgraph]") {
+  RingWorld world;
+  const std::vector<WordSet> training = world.Lap();
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
+  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  const int forward_frames = per_lap + per_lap / 2, reversed_frames = 40;  // 4 m back: inside the exclusion window
+  CatGraphOptions options;
+  options.num_particles = 500;
+  options.new_place_log_offset = 0.0;
+  CatGraphFilter filter(model, options);
+  std::vector<double> s_of_frame;  // where on the ring each frame was taken
+  int forward_closures = 0, reversed_closures = 0, tracked = 0, reversed_hypotheses = 0;
+  double s = 0.0;
+  for (int k = 0; k < forward_frames + reversed_frames; ++k) {
+    Pose2 u = RingWorld::Step();
+    WordSet z;
+    if (k == 0) {
+      u = Pose2();
+    } else if (k == forward_frames) {
+      u = Pose2(0.0, 0.0, std::numbers::pi);  // the U-turn, on the spot
+    } else if (k > forward_frames) {
+      u = Pose2(u.x(), -u.y(), -u.theta());   // the ring, clockwise
+      s -= RingWorld::kStep;
+    } else if (k > 0) {
+      s += RingWorld::kStep;
+    }
+    if (k < forward_frames) z = world.Observe(s);
+    s_of_frame.push_back(s);
+    const CatGraphStep step = filter.Step(k, 0.25 * k, u, z);
+    if (k < forward_frames) {
+      forward_closures += step.closure;
+      continue;
+    }
+    if (k == forward_frames) continue;  // the turn itself
+    reversed_closures += step.closure;
+    if (step.best.edge < 0) continue;
+    reversed_hypotheses += step.best.direction < 0;
+    const GraphEdge& e = filter.graph().edge(step.best.edge);
+    const int node = step.best.alpha < 0.5 ? e.from : e.to;
+    const double apart = std::fmod(std::abs(s_of_frame[filter.graph().node(node).frame] - s) +
+                                       RingWorld::kCircumference, RingWorld::kCircumference);
+    tracked += std::min(apart, RingWorld::kCircumference - apart) <= 0.5;
+  }
+  CHECK(forward_closures > per_lap / 4);             // the second lap closes as it should
+  CHECK(reversed_hypotheses >= reversed_frames - 2);  // the particles turned round with the robot ...
+  CHECK(tracked >= reversed_frames - 2);              // ... and follow it along the ring
+  CHECK(reversed_closures == 0);                      // but that is not recognition
 }
 
 // The relative offset adds c times the frame's self-evidence (how much
