@@ -303,7 +303,8 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
   cmd.add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
   cmd.add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
-               "The camera sees all round: particles facing either way use the nodes' words");
+               "The camera sees all round: particles facing either way use the nodes' words, and either way they close "
+               "(a forward camera facing against the nodes makes no visual closure)");
   cmd.add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)")->capture_default_str();
   cmd.add_option("--exclusion-m", f.exclusion_window_m, "Self-match exclusion window (m of path)")->capture_default_str();
   cmd.add_option("--seed", f.seed, "Filter seed")->capture_default_str();
