@@ -362,6 +362,25 @@ Csv ReadCsv(const std::filesystem::path& path) {
   return csv;
 }
 
+// A built-in scenario simulated into root / "data", and the front end's
+// inputs for it (the default vocabulary, trained on its traversal 1).
+struct PreparedScenario {
+  Dataset dataset;
+  FrontEndInputs inputs;
+};
+
+PreparedScenario SimulateAndPrepare(const std::string& scenario, const std::filesystem::path& root,
+                                    LocalizeCommandOptions& o) {
+  const Result sim = Run({"simulate", "--scenario", scenario, "-o", (root / "data").string(), "--quiet"});
+  INFO(sim.out << sim.err);
+  REQUIRE(sim.status == 0);
+  Dataset d = ReadDataset(root / "data");
+  o.quiet = true;
+  std::ostringstream log;
+  FrontEndInputs in = PrepareFrontEnd(d, o, log);
+  return {std::move(d), std::move(in)};
+}
+
 // Issue #6's office-static acceptance with the defaults (nothing changes
 // between the traversals), and #7's: CAT-Graph+ leaves CAT-Graph's output as
 // it is, adding inferences only where vision did not close.
@@ -369,14 +388,8 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
           "as they are, adding nothing with the relative new-place offset",
           "[apps][localize][slow]") {
   const auto root = testing::TempDir("office_static");
-  const Result sim = Run({"simulate", "--scenario", "office-static", "-o", (root / "data").string(), "--quiet"});
-  INFO(sim.out << sim.err);
-  REQUIRE(sim.status == 0);
-  const Dataset d = ReadDataset(root / "data");
   LocalizeCommandOptions o;
-  o.quiet = true;
-  std::ostringstream log;
-  const FrontEndInputs in = PrepareFrontEnd(d, o, log);
+  const auto [d, in] = SimulateAndPrepare("office-static", root, o);
   const LocalizationResult plus = Localize(d, in.words, in.model, o.localization);
   o.localization.filter.odometric_inference = false;
   const LocalizationResult alone = Localize(d, in.words, in.model, o.localization);
@@ -438,6 +451,7 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
     CHECK(relative_plus.closures[i].matched_frame == relative_alone.closures[i].matched_frame);
   }
   CHECK(relative_plus.discarded_inferences.empty());
+  std::filesystem::remove_all(root);
 }
 
 // Issue #7's split-path scenario with the defaults: the second traversal
@@ -450,14 +464,8 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
 TEST_CASE("office-split: no wrong visual closure at the detour's corners and no false inference",
           "[apps][localize][slow]") {
   const auto root = testing::TempDir("office_split");
-  const Result sim = Run({"simulate", "--scenario", "office-split", "-o", (root / "data").string(), "--quiet"});
-  INFO(sim.out << sim.err);
-  REQUIRE(sim.status == 0);
-  const Dataset d = ReadDataset(root / "data");
   LocalizeCommandOptions o;
-  o.quiet = true;
-  std::ostringstream log;
-  const FrontEndInputs in = PrepareFrontEnd(d, o, log);
+  const auto [d, in] = SimulateAndPrepare("office-split", root, o);
   const LocalizationResult result = Localize(d, in.words, in.model, o.localization);
   int visual = 0, inferred = 0;
   for (const LoopClosure& c : result.closures) {
