@@ -6,7 +6,6 @@
 #include <set>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include "tests/catch.h"
@@ -179,8 +178,8 @@ TEST_CASE("A forward camera turned against the map makes no visual closure while
     reversed_hypotheses += step.best.direction < 0;
     const GraphEdge& e = filter.graph().edge(step.best.edge);
     const int node = step.best.alpha < 0.5 ? e.from : e.to;
-    const double apart = std::fmod(std::abs(s_of_frame[filter.graph().node(node).frame] - s) +
-                                       RingWorld::kCircumference, RingWorld::kCircumference);
+    const double apart =
+        std::fmod(std::abs(s_of_frame[filter.graph().node(node).frame] - s), RingWorld::kCircumference);
     tracked += std::min(apart, RingWorld::kCircumference - apart) <= 0.5;
   }
   CHECK(forward_closures > per_lap / 4);             // the second lap closes as it should
