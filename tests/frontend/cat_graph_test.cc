@@ -89,11 +89,14 @@ struct RingWorld {
   }
 };
 
-// Distance along the ring between frames a and b.
-double RingDistance(int a, int b) {
-  const double apart = std::fmod(std::abs(a - b) * RingWorld::kStep, RingWorld::kCircumference);
+// Distance along the ring between the points `a` and `b` metres along it.
+double RingDistanceM(double a, double b) {
+  const double apart = std::fmod(std::abs(a - b), RingWorld::kCircumference);
   return std::min(apart, RingWorld::kCircumference - apart);
 }
+
+// Distance along the ring between frames a and b.
+double RingDistance(int a, int b) { return RingDistanceM(a * RingWorld::kStep, b * RingWorld::kStep); }
 
 TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and never on the first",
           "[frontend][catgraph]") {
@@ -162,7 +165,7 @@ TEST_CASE("A forward camera turned against the map makes no visual closure while
     } else if (k > forward_frames) {
       u = Pose2(u.x(), -u.y(), -u.theta());   // the ring, clockwise
       s -= RingWorld::kStep;
-    } else if (k > 0) {
+    } else {
       s += RingWorld::kStep;
     }
     if (k < forward_frames) z = world.Observe(s);
@@ -178,9 +181,7 @@ TEST_CASE("A forward camera turned against the map makes no visual closure while
     reversed_hypotheses += step.best.direction < 0;
     const GraphEdge& e = filter.graph().edge(step.best.edge);
     const int node = step.best.alpha < 0.5 ? e.from : e.to;
-    const double apart =
-        std::fmod(std::abs(s_of_frame[filter.graph().node(node).frame] - s), RingWorld::kCircumference);
-    tracked += std::min(apart, RingWorld::kCircumference - apart) <= 0.5;
+    tracked += RingDistanceM(s_of_frame[filter.graph().node(node).frame], s) <= 0.5;
   }
   CHECK(forward_closures > per_lap / 4);             // the second lap closes as it should
   CHECK(reversed_hypotheses >= reversed_frames - 2);  // the particles turned round with the robot ...
