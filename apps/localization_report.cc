@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -277,6 +278,21 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--particles", f.num_particles, "n_p")->capture_default_str();
   cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
+  cmd.add_option_function<std::vector<double>>(
+         "--motion-sigma",
+         [&f](const std::vector<double>& s) {
+           f.motion_sigma = Eigen::Vector3d(s[0], s[1], s[2]);
+           if (!((f.motion_sigma.array() > 0.0).all() && f.motion_sigma.allFinite())) {
+             throw CLI::ValidationError("--motion-sigma", "expected three finite numbers > 0 (σx σy in m, σθ in rad)");
+           }
+         },
+         "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)")
+      ->expected(3)
+      ->default_str([&f] {
+        std::ostringstream text;
+        text << f.motion_sigma.x() << ' ' << f.motion_sigma.y() << ' ' << f.motion_sigma.z();
+        return text.str();
+      }());
   cmd.add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
   cmd.add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
       ->capture_default_str();

@@ -66,7 +66,7 @@ void Validate(const CatGraphOptions& o) {
   if (o.num_particles < 1) fail("num_particles must be >= 1");
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
-  if (!(o.motion_sigma.minCoeff() > 0.0)) fail("motion_sigma must be > 0");
+  if (!((o.motion_sigma.array() > 0.0).all() && o.motion_sigma.allFinite())) fail("motion_sigma must be finite and > 0");
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
@@ -100,6 +100,19 @@ int CatGraphFilter::EligibleBelow() const {
            path_length_m_ - n.path_length_m >= options_.exclusion_window_m;
   });
   return static_cast<int>(first_ineligible - nodes.begin());
+}
+
+double PositionLogLikelihood(const Pose2& start, const Pose2& y, const Pose2& x, const Eigen::Vector3d& sigma,
+                             bool with_heading) {
+  const double dx = x.x() - y.x(), dy = x.y() - y.y();
+  const double c = std::cos(start.theta()), s = std::sin(start.theta());
+  const double along = c * dx + s * dy, across = c * dy - s * dx;
+  double m = along * along / (sigma[0] * sigma[0]) + across * across / (sigma[1] * sigma[1]);
+  if (with_heading) {
+    const double dt = WrapAngle(x.theta() - y.theta());
+    m += dt * dt / (sigma[2] * sigma[2]);
+  }
+  return -0.5 * m;
 }
 
 double NewPlaceMotionLogLikelihood(const Eigen::Vector3d& u, const Eigen::Vector3d& mean,
@@ -201,13 +214,8 @@ void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const
     p.edge = projection->edge;
     p.alpha = projection->alpha;
     p.direction = direction;
-    const double dx = projection->pose.x() - y.x(), dy = projection->pose.y() - y.y();
-    double m = dx * dx / (s[0] * s[0]) + dy * dy / (s[1] * s[1]);
-    if (options_.heading_in_position_likelihood) {
-      const double dt = WrapAngle(heading - y.theta());
-      m += dt * dt / (s[2] * s[2]);
-    }
-    p.log_weight += -0.5 * m;  // Eq 1
+    p.log_weight += PositionLogLikelihood(x, y, Pose2(projection->pose.x(), projection->pose.y(), heading), s,
+                                          options_.heading_in_position_likelihood);
   }
 }
 

@@ -57,6 +57,15 @@ enum class NewPlaceMotion {
   kOdometrySpread,
 };
 
+// log P(x_k | y_k, Q) of Eq 1 up to a constant: the projected pose x (path
+// heading, turned by π for a particle facing against the path) against the
+// propagated pose y, in the frame of the particle's pose at the start of
+// the step (spec §2.1: Q is in control space), so that sigma's first two
+// entries weigh the offset along and across the robot's way whatever the
+// path's direction. Heading only when `with_heading`.
+double PositionLogLikelihood(const Pose2& start, const Pose2& y, const Pose2& x, const Eigen::Vector3d& sigma,
+                             bool with_heading);
+
 // log p(u | u_avg) of Eq 6 up to a constant: -1/2 sum(((u - mean) / sigma)^2)
 // with sigma = noise_sigma (Q's), or per component the larger of noise_sigma
 // and `spread` (the odometry's standard deviation) for kOdometrySpread.

@@ -273,6 +273,19 @@ TEST_CASE("evaluate names the file at fault", "[apps][evaluate][bad-input]") {
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("localize refuses a motion noise that is not three positive numbers, by name", "[apps][localize][bad-input]") {
+  // Parsing fails before the dataset is read: no dataset is needed.
+  for (const std::vector<std::string>& sigma :
+       {std::vector<std::string>{"0.02", "nan", "0.02"}, {"0.02", "-0.05", "0.02"}, {"0.02", "0.05"}}) {
+    std::vector<std::string> args = {"localize", "no-such-dataset", "-o", "unused", "--motion-sigma"};
+    args.insert(args.end(), sigma.begin(), sigma.end());
+    const Result r = Run(args);
+    CAPTURE(r.err);
+    CHECK(r.status != 0);
+    CHECK(r.err.find("--motion-sigma") != std::string::npos);
+  }
+}
+
 TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {
   const auto dir = testing::TempDir("cli_sweep");
   REQUIRE(Run({"generate-graph", "-o", (dir / "g.g2o").string(), "--truth",

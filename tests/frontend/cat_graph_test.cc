@@ -1,6 +1,7 @@
 // The trajectory graph, local graphs, projection and the CAT-Graph filter on
 // worlds whose answers are known.
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <set>
@@ -543,6 +544,27 @@ TEST_CASE("Eq 6's odometry term: Q's sigma, or the odometry's own spread where i
   CHECK_FALSE(NewPlaceMotionFromString("bogus").has_value());
 }
 
+TEST_CASE("Eq 1 weighs the offset along and across the particle's way, not along the map's axes",
+          "[frontend][catgraph]") {
+  const Eigen::Vector3d q(0.02, 0.05, 0.005);  // tighter along the way than across it
+  // A particle heading north (+y) moves 0.12 m; projection moves it 0.1 m
+  // sideways (world x, across its way) and 0.03 m on (world y, along it).
+  const Pose2 start(2.0, 1.0, std::numbers::pi / 2);
+  const Pose2 y = start * Pose2(0.12, 0.0, 0.0);
+  const Pose2 x(y.x() + 0.1, y.y() + 0.03, y.theta());
+  const double expected = -0.5 * (std::pow(0.03 / 0.02, 2) + std::pow(0.1 / 0.05, 2));
+  CHECK(PositionLogLikelihood(start, y, x, q, /*with_heading=*/false) == Approx(expected));
+  // Turned to face south the particle weighs the same offset the same way.
+  const Pose2 back(2.0, 1.0, -std::numbers::pi / 2);
+  CHECK(PositionLogLikelihood(back, y, x, q, false) == Approx(expected));
+  // The heading: 0.01 rad off costs (0.01 / 0.005)^2 / 2 = 2 nats more, either sign, across ±π.
+  const Pose2 turned(x.x(), x.y(), x.theta() + 0.01);
+  CHECK(PositionLogLikelihood(start, y, turned, q, true) == Approx(expected - 2.0));
+  const Pose2 wrapped(0.0, 0.0, std::numbers::pi - 0.005), other(0.0, 0.0, -std::numbers::pi + 0.005);
+  CHECK(PositionLogLikelihood(start, wrapped, other, q, true) == Approx(-2.0));
+  CHECK(PositionLogLikelihood(start, y, y, q, true) == 0.0);
+}
+
 TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") {
   CatGraphOptions o;
   o.closure_threshold = 0.0;
@@ -550,6 +572,13 @@ TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") 
   o = CatGraphOptions{};
   o.new_place_prior = 1.0;
   CHECK_THROWS_AS(Validate(o), std::invalid_argument);
+  for (const double bad : {0.0, -0.01, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    o = CatGraphOptions{};
+    o.motion_sigma[1] = bad;
+    CHECK_THROWS_AS(Validate(o), std::invalid_argument);
+  }
+  CHECK_NOTHROW(Validate(CatGraphOptions{}));
 }
 
 }  // namespace
