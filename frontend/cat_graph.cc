@@ -104,10 +104,9 @@ int CatGraphFilter::EligibleBelow() const {
 
 double PositionLogLikelihood(const Pose2& start, const Pose2& y, const Pose2& x, const Eigen::Vector3d& sigma,
                              bool with_heading) {
-  const double dx = x.x() - y.x(), dy = x.y() - y.y();
-  const double c = std::cos(start.theta()), s = std::sin(start.theta());
-  const double along = c * dx + s * dy, across = c * dy - s * dx;
-  double m = along * along / (sigma[0] * sigma[0]) + across * across / (sigma[1] * sigma[1]);
+  // x - y along (first) and across (second) the start pose's heading.
+  const Eigen::Vector2d d = start.rotation().transpose() * (x.translation() - y.translation());
+  double m = d.x() * d.x() / (sigma[0] * sigma[0]) + d.y() * d.y() / (sigma[1] * sigma[1]);
   if (with_heading) {
     const double dt = WrapAngle(x.theta() - y.theta());
     m += dt * dt / (sigma[2] * sigma[2]);
