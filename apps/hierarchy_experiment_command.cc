@@ -141,7 +141,10 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   for (const std::uint64_t seed : o.seeds) {
     localization.filter.seed = seed;
     localization.false_matches.clear();
-    const LocalizationResult without = Localize(d, words, model, localization);
+    // Its own options: feedback re-runs the front end with the options it is
+    // given, and the run without injection must not re-run with the matches.
+    const LocalizationOptions clean = localization;
+    const LocalizationResult without = Localize(d, words, model, clean);
     o.injection.seed = seed;
     localization.false_matches = PlanFalseVisualMatches(d, localization.filter, o.injection);
     const LocalizationResult with = Localize(d, words, model, localization);
@@ -155,8 +158,7 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
       row.seed = seed;
       row.hierarchy = o.hierarchies[p];
       row.ate_without_m = AteOf(
-          MapWithFeedback(d, words, model, localization, without, optimizer, policies[p], truth, o.feedback_reruns)
-              .outcome);
+          MapWithFeedback(d, words, model, clean, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
       const FedBackMap m =
           MapWithFeedback(d, words, model, localization, with, optimizer, policies[p], truth, o.feedback_reruns);
       row.ate_with_m = AteOf(m.outcome);
