@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -272,27 +273,43 @@ void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
       ->capture_default_str();
 }
 
+namespace {
+
+std::string FormatSigma(const Eigen::Vector3d& sigma) {
+  std::ostringstream text;
+  text << sigma.x() << ' ' << sigma.y() << ' ' << sigma.z();
+  return text.str();
+}
+
+// An option of three finite numbers > 0 (σx σy in m, σθ in rad); a bad value
+// is an error that names the option.
+void AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& default_text,
+                    const std::string& description, std::function<void(const Eigen::Vector3d&)> set) {
+  cmd.add_option_function<std::vector<double>>(
+         name,
+         [name, set](const std::vector<double>& s) {
+           const Eigen::Vector3d sigma(s[0], s[1], s[2]);
+           if (!((sigma.array() > 0.0).all() && sigma.allFinite())) {
+             throw CLI::ValidationError(name, "expected three finite numbers > 0 (σx σy in m, σθ in rad)");
+           }
+           set(sigma);
+         },
+         description)
+      ->expected(3)
+      ->default_str(default_text);
+}
+
+}  // namespace
+
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   CatGraphOptions& f = o.localization.filter;
   AddVocabularyOptions(cmd, o);
   cmd.add_option("--particles", f.num_particles, "n_p")->capture_default_str();
   cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
-  cmd.add_option_function<std::vector<double>>(
-         "--motion-sigma",
-         [&f](const std::vector<double>& s) {
-           f.motion_sigma = Eigen::Vector3d(s[0], s[1], s[2]);
-           if (!((f.motion_sigma.array() > 0.0).all() && f.motion_sigma.allFinite())) {
-             throw CLI::ValidationError("--motion-sigma", "expected three finite numbers > 0 (σx σy in m, σθ in rad)");
-           }
-         },
-         "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)")
-      ->expected(3)
-      ->default_str([&f] {
-        std::ostringstream text;
-        text << f.motion_sigma.x() << ' ' << f.motion_sigma.y() << ' ' << f.motion_sigma.z();
-        return text.str();
-      }());
+  AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),
+                 "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)",
+                 [&f](const Eigen::Vector3d& s) { f.motion_sigma = s; });
   cmd.add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
   cmd.add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
       ->capture_default_str();
@@ -309,6 +326,10 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
          "odometry's own spread: a turn the map does not make takes the robot off it). docs/frontend.md")
       ->check(CLI::IsMember(NewPlaceMotionNames()))
       ->default_str(std::string(ToString(f.new_place_motion)));
+  AddSigmaOption(cmd, "--new-place-motion-sigma", "Q's",
+                 "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean "
+                 "(under spread, the floor under the odometry's spread). docs/frontend.md \"Corners and Q\"",
+                 [&f](const Eigen::Vector3d& s) { f.new_place_motion_sigma = s; });
   cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
                "Let particles onto nodes that dead reckoning rules out");
   cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();

@@ -66,7 +66,11 @@ void Validate(const CatGraphOptions& o) {
   if (o.num_particles < 1) fail("num_particles must be >= 1");
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
-  if (!((o.motion_sigma.array() > 0.0).all() && o.motion_sigma.allFinite())) fail("motion_sigma must be finite and > 0");
+  auto positive = [](const Eigen::Vector3d& v) { return (v.array() > 0.0).all() && v.allFinite(); };
+  if (!positive(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
+  if (o.new_place_motion_sigma && !positive(*o.new_place_motion_sigma)) {
+    fail("new_place_motion_sigma must be finite and > 0");
+  }
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
@@ -404,7 +408,8 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     u_mean_ += delta / u_count_;
     u_m2_ += delta.cwiseProduct(u.ToVector() - u_mean_);
     log_new += NewPlaceMotionLogLikelihood(u.ToVector(), u_mean_, (u_m2_ / u_count_).cwiseSqrt(),
-                                           options_.motion_sigma, options_.new_place_motion);
+                                           options_.new_place_motion_sigma.value_or(options_.motion_sigma),
+                                           options_.new_place_motion);
   }
   double log_total = log_new;
   for (const Particle& p : particles_) log_total = LogSumExp(log_total, p.log_weight);

@@ -103,6 +103,11 @@ struct CatGraphOptions {
   // constant offset alone.
   double new_place_relative_offset = 0.0;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
+  // Eq 6's σ under both models (under `spread`, the floor under the
+  // odometry's spread) [D, docs/frontend.md "Corners and Q"]: how much a
+  // new place is charged for odometry unlike the mean. Unset: Q's σ
+  // (motion_sigma), the spec's reading (§6.3). Finite and > 0 when set.
+  std::optional<Eigen::Vector3d> new_place_motion_sigma;
   double exclusion_window_s = 10.0;        // nodes younger than this ...
   double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible
   // Odometric gate [D, docs/frontend.md]: a node is not eligible while dead

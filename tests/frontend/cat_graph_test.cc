@@ -454,30 +454,48 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
   for (int k = run.first; k <= run.last; ++k) CHECK(carried.contains(k));
 }
 
+// New place's probability after a lap of the ring and then one step that
+// sees none of the ring's words, 100 s later, with one large, untypical
+// odometry increment.
+double NewPlaceAfterGap(const CatGraphOptions& options) {
+  RingWorld world;
+  const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
+  CatGraphFilter filter(model, options);
+  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  for (int k = 0; k < per_lap; ++k) {
+    filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep));
+  }
+  return filter.Step(per_lap, 0.25 * per_lap + 100.0, Pose2(0.3, 0.2, 2.0), WordSet{}).new_place_probability;
+}
+
+CatGraphOptions GapOptions(double sequence_break_s) {
+  CatGraphOptions options;
+  options.num_particles = 200;
+  options.new_place_log_offset = 0.0;
+  options.new_place_motion = NewPlaceMotion::kFilterNoise;  // the premise below: Eq 6 weighed by Q
+  options.sequence_break_s = sequence_break_s;
+  return options;
+}
+
 TEST_CASE("A gap between frames restarts the particles instead of weighing the motion across it",
           "[frontend][catgraph]") {
-  RingWorld world;
-  const std::vector<WordSet> training = world.Lap();
-  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
-  auto new_place_after_gap = [&](double sequence_break_s) {
-    CatGraphOptions options;
-    options.num_particles = 200;
-    options.new_place_log_offset = 0.0;
-    options.new_place_motion = NewPlaceMotion::kFilterNoise;  // the premise below: Eq 6 weighed by Q
-    options.sequence_break_s = sequence_break_s;
-    CatGraphFilter filter(model, options);
-    const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
-    for (int k = 0; k < per_lap; ++k) {
-      filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep));
-    }
-    // 100 s later, somewhere that sees none of the ring's words: the
-    // odometry across the gap is one large, untypical increment.
-    const CatGraphStep after = filter.Step(per_lap, 0.25 * per_lap + 100.0, Pose2(0.3, 0.2, 2.0), WordSet{});
-    return after.new_place_probability;
-  };
   // Eq 6's odometry term would rule the new place out (a 40-sigma increment).
-  CHECK(new_place_after_gap(1e9) < 1e-6);
-  CHECK(new_place_after_gap(5.0) > 1e-3);
+  CHECK(NewPlaceAfterGap(GapOptions(1e9)) < 1e-6);
+  CHECK(NewPlaceAfterGap(GapOptions(5.0)) > 1e-3);
+}
+
+TEST_CASE("Eq 6 weighs the new place's odometry on new_place_motion_sigma when it is set, on Q's otherwise",
+          "[frontend][catgraph]") {
+  // Without a restart, the untypical increment rules the new place out under
+  // Q's σ; a scale of 10 per component makes it a fraction of a sigma, and
+  // the new place holds. Q itself (the particles' proposal and Eq 1) is the
+  // same in both runs.
+  CatGraphOptions wide = GapOptions(1e9);
+  wide.new_place_motion_sigma = Eigen::Vector3d(10.0, 10.0, 10.0);
+  CHECK(NewPlaceAfterGap(wide) > 1e-3);
+  CatGraphOptions as_q = GapOptions(1e9);
+  as_q.new_place_motion_sigma = as_q.motion_sigma;
+  CHECK(NewPlaceAfterGap(as_q) == NewPlaceAfterGap(GapOptions(1e9)));
 }
 
 // A straight corridor driven once: each 0.5 m has its own 4 words (80 %),
@@ -577,6 +595,11 @@ TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") 
     o = CatGraphOptions{};
     o.motion_sigma[1] = bad;
     CHECK_THROWS_AS(Validate(o), std::invalid_argument);
+    o = CatGraphOptions{};
+    o.new_place_motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
+    CHECK_NOTHROW(Validate(o));
+    (*o.new_place_motion_sigma)[2] = bad;
+    CHECK_THROWS_WITH(Validate(o), Catch::Contains("new_place_motion_sigma"));
   }
   CHECK_NOTHROW(Validate(CatGraphOptions{}));
 }
