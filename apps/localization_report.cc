@@ -289,7 +289,7 @@ void AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& d
          name,
          [name, set](const std::vector<double>& s) {
            const Eigen::Vector3d sigma(s[0], s[1], s[2]);
-           if (!((sigma.array() > 0.0).all() && sigma.allFinite())) {
+           if (!IsValidSigma(sigma)) {
              throw CLI::ValidationError(name, "expected three finite numbers > 0 (σx σy in m, σθ in rad)");
            }
            set(sigma);

@@ -61,14 +61,15 @@ std::vector<Particle> SystematicResample(const std::vector<Particle>& particles,
 
 }  // namespace
 
+bool IsValidSigma(const Eigen::Vector3d& sigma) { return (sigma.array() > 0.0).all() && sigma.allFinite(); }
+
 void Validate(const CatGraphOptions& o) {
   auto fail = [](const std::string& what) { throw std::invalid_argument("CatGraphOptions: " + what); };
   if (o.num_particles < 1) fail("num_particles must be >= 1");
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
-  auto positive = [](const Eigen::Vector3d& v) { return (v.array() > 0.0).all() && v.allFinite(); };
-  if (!positive(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
-  if (o.new_place_motion_sigma && !positive(*o.new_place_motion_sigma)) {
+  if (!IsValidSigma(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
+  if (o.new_place_motion_sigma && !IsValidSigma(*o.new_place_motion_sigma)) {
     fail("new_place_motion_sigma must be finite and > 0");
   }
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");

@@ -141,6 +141,10 @@ struct CatGraphOptions {
 // Throws std::invalid_argument naming the first field out of range.
 void Validate(const CatGraphOptions& options);
 
+// Whether every entry of a σ (motion_sigma, new_place_motion_sigma) is
+// finite and > 0.
+bool IsValidSigma(const Eigen::Vector3d& sigma);
+
 // The odometric gate's radius for a node `path_since_m` of path behind the
 // robot: a node farther than this from the robot by dead reckoning is not
 // eligible (infinite when the gate is off).
