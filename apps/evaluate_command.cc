@@ -115,11 +115,11 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
         << ", F1 " << scores->f1 << " (true accepted " << scores->true_positives
         << ", false accepted " << scores->false_positives << ", false rejected "
         << scores->true_negatives << ", true rejected " << scores->false_negatives << ")\n"
-        << "outliers rejected: " << scores->outlier_rejection << "; "
+        << "outliers rejected: " << 100.0 * scores->outlier_rejection << " %; "
         << scores->outliers_explained_by_truth << " outliers are explained by the truth (chi2 at "
         << "the true poses within the gate), " << scores->explained_outliers_accepted
-        << " of them accepted; of the others " << scores->unexplained_outlier_rejection
-        << " rejected\n";
+        << " of them accepted; of the others " << 100.0 * scores->unexplained_outlier_rejection
+        << " % rejected\n";
   }
 }
 
