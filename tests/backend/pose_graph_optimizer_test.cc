@@ -1,10 +1,11 @@
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <optional>
-#include <utility>
-#include <vector>
 #include <random>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "tests/catch.h"
 
@@ -623,8 +624,7 @@ std::optional<Pose3> OdometryBetween(const PoseGraph3& graph, std::int64_t from,
   for (std::int64_t k = from; k != to;) {
     std::int64_t step = std::min<std::int64_t>(3, (to - k) * direction);
     std::optional<Pose3> edge;
-    for (; step >= 1 && !(edge = MeasuredBetween(graph, k, k + step * direction)); --step) {
-    }
+    while (step >= 1 && !(edge = MeasuredBetween(graph, k, k + step * direction))) --step;
     if (!edge) return std::nullopt;
     pose = pose * *edge;
     k += step * direction;
@@ -654,7 +654,7 @@ TEST_CASE("SE-Sync's cubicle contradicts itself at the four closures the default
   // away, which agree with each other: they are failed registrations, not
   // noise. The file alone shows it; no solve is needed.
   const auto cubicle = std::get<PoseGraph3>(ReadGraphFile(root / "se-sync/cubicle.g2o").graph);
-  constexpr double kDegree = M_PI / 180.0;
+  constexpr double kDegree = std::numbers::pi / 180.0;
   struct Pair {
     std::int64_t a, b, c, d;
     bool agree;
