@@ -141,10 +141,7 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   for (const std::uint64_t seed : o.seeds) {
     localization.filter.seed = seed;
     localization.false_matches.clear();
-    // Its own options: feedback re-runs the front end with the options it is
-    // given, and the run without injection must not re-run with the matches.
-    const LocalizationOptions clean = localization;
-    const LocalizationResult without = Localize(d, words, model, clean);
+    const LocalizationResult without = Localize(d, words, model, localization);
     o.injection.seed = seed;
     localization.false_matches = PlanFalseVisualMatches(d, localization.filter, o.injection);
     const LocalizationResult with = Localize(d, words, model, localization);
@@ -157,16 +154,15 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
       Row row;
       row.seed = seed;
       row.hierarchy = o.hierarchies[p];
-      row.ate_without_m = AteOf(
-          MapWithFeedback(d, words, model, clean, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
-      const FedBackMap m =
-          MapWithFeedback(d, words, model, localization, with, optimizer, policies[p], truth, o.feedback_reruns);
+      row.ate_without_m =
+          AteOf(MapWithFeedback(d, words, model, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
+      const FedBackMap m = MapWithFeedback(d, words, model, with, optimizer, policies[p], truth, o.feedback_reruns);
       row.ate_with_m = AteOf(m.outcome);
       row.injection = m.first.injection;
       row.solves = m.first.solved.solves;
       row.reruns = m.reruns;
-      row.ate_oracle_m = AteOf(
-          MapWithFeedback(d, words, model, vetoed, oracle, optimizer, policies[p], truth, o.feedback_reruns).outcome);
+      row.ate_oracle_m =
+          AteOf(MapWithFeedback(d, words, model, oracle, optimizer, policies[p], truth, o.feedback_reruns).outcome);
       const InjectionOutcome& i = row.injection;
       out << "seed " << seed << ", " << row.hierarchy << ": " << i.parents_rejected << " of " << i.parents
           << " false closures rejected, " << i.children_of_rejected_accepted << " of "

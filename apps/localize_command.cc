@@ -78,8 +78,7 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
       LocalizationResult r = Localize(d, words, model, options);
       std::optional<FedBackMap> mapped;
       if (o.back_end) {
-        mapped = MapWithFeedback(d, words, model, options, std::move(r), optimizer, hierarchy, truth,
-                                 kDefaultFeedbackReruns);
+        mapped = MapWithFeedback(d, words, model, std::move(r), optimizer, hierarchy, truth, kDefaultFeedbackReruns);
         r = std::move(mapped->front);
       }
       int inferred = 0, wrong = 0;

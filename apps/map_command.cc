@@ -144,8 +144,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on "
       << first.graph.vertices.size() << " poses and " << first.closures.size() << " closures\n";
   const Trajectory2 truth = TruthAtFrames(d);
-  const FedBackMap fed = MapWithFeedback(d, inputs.words, inputs.model, o.front.localization, std::move(first),
-                                         optimizer, hierarchy_options, truth, o.feedback_reruns);
+  const FedBackMap fed = MapWithFeedback(d, inputs.words, inputs.model, std::move(first), optimizer,
+                                         hierarchy_options, truth, o.feedback_reruns);
   const LocalizationResult& r = fed.front;
   const MapOutcome& m = fed.outcome;
   std::vector<int> vetoed_frames;

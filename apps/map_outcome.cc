@@ -71,10 +71,10 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
 }
 
 FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
-                           LocalizationOptions localization, LocalizationResult front,
-                           const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
-                           const Trajectory2& truth, int max_reruns) {
+                           LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
+                           const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns) {
   FedBackMap out;
+  LocalizationOptions localization = front.options;
   out.outcome = SolveMap(front, optimizer, hierarchy, truth);
   out.first = out.outcome;
   // Without CAT-Graph+ a veto changes nothing a re-run would compute.

@@ -70,9 +70,10 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
 // rejected visual closures vetoed (LocalizationOptions::vetoed_frames), so
 // CAT-Graph+ carries its inferences across them to the next closure, and
 // solves again with the vetoed closures held off; until the back end rejects
-// no further visual closure, or after `max_reruns` re-runs. Policy flat (the
-// comparison without a hierarchy) and a front end without CAT-Graph+ are
-// solved once.
+// no further visual closure, or after `max_reruns` re-runs. Each re-run uses
+// the options `front` was made with (LocalizationResult::options) plus the
+// vetoes. Policy flat (the comparison without a hierarchy) and a front end
+// without CAT-Graph+ are solved once.
 // catgraph map's default max_reruns.
 inline constexpr int kDefaultFeedbackReruns = 3;
 struct FedBackMap {
@@ -82,9 +83,8 @@ struct FedBackMap {
   int reruns = 0;
 };
 FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
-                           LocalizationOptions localization, LocalizationResult front,
-                           const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
-                           const Trajectory2& truth, int max_reruns);
+                           LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
+                           const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns);
 
 }  // namespace catgraph
 

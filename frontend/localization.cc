@@ -98,6 +98,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   }
   CatGraphFilter filter(model, options.filter);
   LocalizationResult result;
+  result.options = options;
   std::vector<std::size_t> sizes;
   for (const auto& w : words) sizes.push_back(w.size());
   std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(sizes.size() / 2), sizes.end());

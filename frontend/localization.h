@@ -64,14 +64,6 @@ struct DiscardedInference {
 // "total_path", "filter_lost", "sequence_break".
 std::string_view ToString(DiscardReason reason);
 
-struct LocalizationResult {
-  std::vector<FrameLocalization> frames;
-  std::vector<LoopClosure> closures;  // in the order they were made
-  std::vector<DiscardedInference> discarded_inferences;
-  PoseGraph2 graph;               // vertex id = frame index; initial guess = odometry
-  std::size_t words_per_frame_median = 0;
-};
-
 // The uncertainty the result's pose graph gives its edges, for the back end.
 // The spec (§2.9) gives every edge the filter's Q: a particle diffusion per
 // frame, as loose as the step itself for odometry (0.05 m on 0.053 m steps)
@@ -111,6 +103,18 @@ struct LocalizationOptions {
   int threads = 0;                // feature extraction; 0: every core
   // Called from the calling thread: stage is "features" or "filter".
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;
+};
+
+struct LocalizationResult {
+  std::vector<FrameLocalization> frames;
+  std::vector<LoopClosure> closures;  // in the order they were made
+  std::vector<DiscardedInference> discarded_inferences;
+  PoseGraph2 graph;               // vertex id = frame index; initial guess = odometry
+  std::size_t words_per_frame_median = 0;
+  // The options that made it, so that a re-run (the back end's feedback,
+  // apps/map_outcome.h) starts from them and cannot mix one run's result
+  // with another's options.
+  LocalizationOptions options;
 };
 
 // The words of every frame of the dataset, in frame order, extracted on
