@@ -493,7 +493,9 @@ std::pair<int, Pose2> CatGraphFilter::LoopTo(const LocationHypothesis& h) {
 void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& step) {
   if (closure) {
     // Total-path validation (§3.4): the odometric hypothesis against the
-    // visual match, in a local graph around the match.
+    // visual match, in a local graph around the match. O last moved with the
+    // previous frame; its hypothesis is carried on by this frame's odometry,
+    // so that both are of this frame (y_p'), without drawing O's noise.
     if (reference_node_ >= 0 && !pending_.empty()) {
       const LocationHypothesis odometric = BestHypothesis(odometric_);
       double distance = std::numeric_limits<double>::infinity();
@@ -501,8 +503,8 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
         const GraphEdge& e = graph_.edge(step.best.edge);
         builder_.Build(graph_, e.from, options_.total_validation_m + e.length_m + 1e-6, eligible_, local_);
         const auto a = local_.PointPose(step.best.edge, step.best.alpha);
-        const auto b = local_.PointPose(odometric.edge, odometric.alpha);
-        if (a && b) distance = (a->translation() - b->translation()).norm();
+        const auto b = HypothesisPose(odometric);
+        if (a && b) distance = (a->translation() - (*b * u).translation()).norm();
       }
       step.reference_node = reference_node_;
       (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
