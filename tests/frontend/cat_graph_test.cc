@@ -355,9 +355,9 @@ TEST_CASE("Total-path validation weighs the odometric hypothesis at the validati
   // one-frame gap between visual closures. The odometric filter restarts
   // from the visual one at each closure, so two frames later, carried by
   // both frames' odometry, its hypothesis is where the visual match is,
-  // give or take both filters' noise. Carried by the first frame's only, it
-  // lags by a step (0.1 m, d_tot here) and most inferences are discarded:
-  // 35 validated and 60 discarded until 2026-12-03, when that was so.
+  // give or take both filters' noise. Carried by the first frame's only, as
+  // until 2026-12-03, it lags by a step (0.1 m, d_tot here) and most
+  // inferences are discarded: 35 validated, 60 discarded.
   RingWorld world;
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words() + 200), FabMapOptions{});
   CatGraphOptions options;
