@@ -339,6 +339,14 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                "CAT-Graph alone: no odometry-inferred closures (CAT-Graph+ is the default)");
   cmd.add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
   cmd.add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
+  cmd.add_option("--odometric-particle-factor", f.odometric_particle_factor,
+                 "CAT-Graph+: the odometric filter starts from this many copies of each visual particle (1: the "
+                 "spec's copy of the visual filter)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd.add_flag("--odometric-seed-all", [&f](std::int64_t) { f.odometric_seed_local = false; },
+               "CAT-Graph+: the odometric filter starts from every visual particle (the spec), not only those within "
+               "d_h of the visual match");
   cmd.add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
                "The camera sees all round: particles facing either way use the nodes' words, and either way they close "
                "(a forward camera facing against the nodes makes no visual closure)");

@@ -83,6 +83,9 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
   if (!(o.local_validation_m > 0.0 && o.total_validation_m > 0.0)) fail("d_loc and d_tot must be > 0");
+  if (!(o.odometric_particle_factor >= 1 && o.odometric_particle_factor <= 100)) {
+    fail("odometric_particle_factor must be in [1, 100]");
+  }
   if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
   if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
@@ -490,6 +493,40 @@ std::pair<int, Pose2> CatGraphFilter::LoopTo(const LocationHypothesis& h) {
   return {matched, HypothesisPose(h)->Between(local_.PoseOf(matched))};
 }
 
+void CatGraphFilter::ReinitialiseOdometric(const LocationHypothesis& match) {
+  // §3.5 copies V; here only V's particles within d_h of the match, each
+  // copied `odometric_particle_factor` times (CatGraphOptions). The match is
+  // the centre of Eq 4's disc, a particle's own place, so one is always kept.
+  std::vector<Particle>& seeds = odometric_seeds_;
+  seeds.clear();
+  if (options_.odometric_seed_local) {
+    const GraphEdge& e = graph_.edge(match.edge);
+    builder_.Build(graph_, e.from, options_.hypothesis_radius_m + e.length_m + 1e-6, eligible_, local_);
+    if (const std::optional<Pose2> centre = local_.PointPose(match.edge, match.alpha)) {
+      for (const Particle& p : particles_) {
+        if (p.log_weight == kNegInf) continue;
+        const std::optional<Pose2> x = local_.PointPose(p.edge, p.alpha);
+        if (x && (x->translation() - centre->translation()).norm() <= options_.hypothesis_radius_m) {
+          seeds.push_back(p);
+        }
+      }
+    }
+  }
+  if (seeds.empty()) seeds = particles_;  // the spec's copy of V
+  const int factor = options_.odometric_particle_factor;
+  double log_total = kNegInf;  // each copy weighs w / (factor × the seeds' total)
+  for (const Particle& p : seeds) log_total = LogSumExp(log_total, p.log_weight);
+  log_total += std::log(static_cast<double>(factor));
+  odometric_.clear();
+  odometric_.reserve(seeds.size() * static_cast<std::size_t>(factor));
+  for (const Particle& p : seeds) {
+    for (int k = 0; k < factor; ++k) {
+      odometric_.push_back(p);
+      odometric_.back().log_weight -= log_total;
+    }
+  }
+}
+
 void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& step) {
   if (closure) {
     // Total-path validation (§3.4): the odometric hypothesis against the
@@ -509,8 +546,7 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
       step.reference_node = reference_node_;
       (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
     }
-    // Re-initialisation (§3.5).
-    odometric_ = particles_;
+    ReinitialiseOdometric(step.best);
     reference_node_ = step.node;
     reference_location_ = step.best;
     T_since_reference_ = Pose2();

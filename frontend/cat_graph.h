@@ -135,6 +135,17 @@ struct CatGraphOptions {
   bool odometric_inference = true;
   double local_validation_m = 2.0;         // d_loc; > 0
   double total_validation_m = 1.0;         // d_tot; > 0
+  // How O is re-initialised at a visual closure (spec §3.5 copies V) [D,
+  // docs/frontend.md "The odometric filter's along-track spread"]. O has no
+  // observation: its cloud's centre walks along the track with each
+  // resampling, by chance, less so the more particles it holds; and a
+  // particle of V far from the match (a new-place draw) that moves with the
+  // odometry is as good as the main cloud, and can grow into a second mode.
+  // So O takes only V's particles within d_h of the match (false: all of V,
+  // the spec), each copied this many times at 1/factor of its weight
+  // (1: the spec); [1, 100].
+  bool odometric_seed_local = true;
+  int odometric_particle_factor = 5;
   std::uint64_t seed = 1;
 };
 
@@ -246,6 +257,8 @@ class CatGraphFilter {
 
   const TrajectoryGraph& graph() const { return graph_; }
   const std::vector<Particle>& particles() const { return particles_; }
+  // CAT-Graph+'s odometric particle set O (empty until a visual closure).
+  const std::vector<Particle>& odometric_particles() const { return odometric_; }
   const CatGraphOptions& options() const { return options_; }
 
  private:
@@ -267,6 +280,8 @@ class CatGraphFilter {
   // CAT-Graph+ after the visual step (spec §3).
   // `closure`: a visual closure CAT-Graph+ may use was made this step.
   void OdometricStep(const Pose2& u, bool closure, CatGraphStep& step);
+  // O from V at a visual closure matched at `match` (§3.5; CatGraphOptions).
+  void ReinitialiseOdometric(const LocationHypothesis& match);
 
   const FabMapModel& model_;
   CatGraphOptions options_;
@@ -293,6 +308,7 @@ class CatGraphFilter {
   // CAT-Graph+ state (spec §3.2).
   std::vector<Particle> odometric_;        // the odometric particle set O
   std::mt19937_64 odometric_rng_;          // its own noise: V never depends on O
+  std::vector<Particle> odometric_seeds_;  // scratch: V's particles O starts from
   int reference_node_ = -1;                // N_j of the last visual closure
   LocationHypothesis reference_location_;  // y_j'
   Pose2 T_since_reference_;                // odometry since j

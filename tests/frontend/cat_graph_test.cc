@@ -237,41 +237,67 @@ TEST_CASE("the relative new-place offset is c times the frame's self-evidence", 
   CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_relative_offset"));
 }
 
-// Two laps of the ring; on the second, the stretch [10 m, 16 m) looks new
-// (words no training image has), as a refurnished corridor does.
+// Two laps of the ring; on the second, a stretch looks new (words no
+// training image has), as a refurnished corridor does.
+struct ChangedRing {
+  bool odometric_inference = true;
+  double changed_from_m = 10.0, changed_to_m = 16.0;  // on the ring
+  // Wheel odometry's noise on both laps: the step's scale and the turn per
+  // frame, so that the map's path and the robot's odometry disagree as real
+  // ones do; 0: exact.
+  double scale_sigma = 0.0, turn_sigma_rad = 0.0;
+  int gap_frame = -1;  // >= 0: the frames from it on come 100 s later (a sequence break)
+  std::uint64_t seed = 1;  // the filter's
+  int changed_words = 40;  // the vocabulary's words beyond the ring's: 3 per changed 0.5 m and 2 more
+};
 struct ChangedRingRun {
   std::vector<CatGraphStep> steps;
+  TrajectoryGraph graph;  // node ids are frame indices
   int per_lap = 0;
 };
-// `gap_frame` >= 0: the frames from it on come 100 s later (a sequence break).
-ChangedRingRun RunChangedRing(bool odometric_inference, int gap_frame = -1) {
+ChangedRingRun RunChangedRing(const ChangedRing& ring, CatGraphOptions options = {}) {
   RingWorld world;
   const std::vector<WordSet> training = world.Lap();
   const int changed_word = RingWorld::Words();  // words beyond the ring's
-  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + 40), FabMapOptions{});
-  CatGraphOptions options;
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + ring.changed_words), FabMapOptions{});
   options.num_particles = 500;
   options.new_place_log_offset = 0.0;
-  options.odometric_inference = odometric_inference;
+  options.odometric_inference = ring.odometric_inference;
+  options.seed = ring.seed;
   CatGraphFilter filter(model, options);
+  std::mt19937_64 odometry_noise(100 + ring.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
   ChangedRingRun run;
   run.per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   for (int k = 0; k < 2 * run.per_lap; ++k) {
     const double s = k * RingWorld::kStep;
     const double on_ring = std::fmod(s, RingWorld::kCircumference);
     WordSet z = world.Observe(s);
-    if (k >= run.per_lap && on_ring >= 10.0 && on_ring < 16.0) {
-      z = {changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3, changed_word + static_cast<int>((on_ring - 10.0) / 0.5) * 3 + 1};
+    if (k >= run.per_lap && on_ring >= ring.changed_from_m && on_ring < ring.changed_to_m) {
+      const int bin = static_cast<int>((on_ring - ring.changed_from_m) / 0.5);
+      z = {changed_word + 3 * bin, changed_word + 3 * bin + 1};
     }
-    const double t = 0.25 * k + (gap_frame >= 0 && k >= gap_frame ? 100.0 : 0.0);
-    run.steps.push_back(filter.Step(k, t, k == 0 ? Pose2() : RingWorld::Step(), z));
+    const Pose2 exact = RingWorld::Step();
+    const double scale = 1.0 + ring.scale_sigma * normal(odometry_noise);
+    const double turn = ring.turn_sigma_rad * normal(odometry_noise);
+    const Pose2 u(scale * exact.x(), scale * exact.y(), exact.theta() + turn);
+    const double t = 0.25 * k + (ring.gap_frame >= 0 && k >= ring.gap_frame ? 100.0 : 0.0);
+    run.steps.push_back(filter.Step(k, t, k == 0 ? Pose2() : u, z));
   }
+  run.graph = filter.graph();
   return run;
+}
+
+// Where on the ring (m) a location lies: node ids are frame indices and the
+// location lies between its edge's ends.
+double RingPositionM(const TrajectoryGraph& graph, const LocationHypothesis& at) {
+  const GraphEdge& e = graph.edge(at.edge);
+  return RingWorld::kStep * (e.from + at.alpha * (e.to - e.from));
 }
 
 TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, from odometry",
           "[frontend][catgraph][catgraph-plus]") {
-  const ChangedRingRun run = RunChangedRing(true);
+  const ChangedRingRun run = RunChangedRing({});
   int changed = 0, visual_in_changed = 0, inferred_in_changed = 0;
   std::set<int> inferred_nodes;
   double worst = 0.0;
@@ -303,50 +329,104 @@ TEST_CASE("CAT-Graph+ follows the robot along the old path through 23 m of chang
           "[frontend][catgraph][catgraph-plus]") {
   // The second lap's view changes over 5-28 m of the ring (230 frames
   // without a visual closure), and wheel odometry is noisy on both laps (1 %
-  // of the step along, 0.002 rad per frame), so the map's path and the
-  // robot's odometry disagree as real ones do. The odometric hypothesis
+  // of the step along, 0.002 rad per frame). The odometric hypothesis
   // diffuses with the filter's Q; 10 m and more after the last visual
-  // closure its inferences stay within a few steps of the truth.
-  RingWorld world;
-  const int changed_word = RingWorld::Words();
-  const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words() + 200), FabMapOptions{});
-  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  // closure its inferences stay within a few steps of the truth. Over filter
+  // seeds 1-40 the rms of those inferences is, per seed, 0.05-0.51 m: the
+  // centre of O's cloud walks along the track with each resampling. Pooled
+  // over seeds 1-12 (measured 2026-12-03): 0.189 m at the defaults, 0.217 m
+  // with one copy of each visual particle. Seeded from all of V, five copies
+  // each, O grew a second mode ahead of the robot from V's new-place draws
+  // in 3 of the 40 seeds (9, 31 and 38), and total-path validation
+  // discarded 147-153 inferences in each: all of that lap's.
   double sum_sq = 0.0;
-  int count = 0;
-  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    CatGraphOptions options;
-    options.num_particles = 500;
-    options.new_place_log_offset = 0.0;
-    options.seed = seed;
-    CatGraphFilter filter(model, options);
-    std::mt19937_64 odometry_noise(100 + seed);
-    std::normal_distribution<double> normal(0.0, 1.0);
-    for (int k = 0; k < 2 * per_lap; ++k) {
-      const double on_ring = std::fmod(k * RingWorld::kStep, RingWorld::kCircumference);
-      WordSet z = world.Observe(k * RingWorld::kStep);
-      if (k >= per_lap && on_ring >= 5.0 && on_ring < 28.0) {
-        const int bin = static_cast<int>((on_ring - 5.0) / 0.5);
-        z = {changed_word + 3 * bin, changed_word + 3 * bin + 1};
-      }
-      const Pose2 exact = RingWorld::Step();
-      const double scale = 1.0 + 0.01 * normal(odometry_noise), turn = 0.002 * normal(odometry_noise);
-      const Pose2 u(scale * exact.x(), scale * exact.y(), exact.theta() + turn);
-      const CatGraphStep step = filter.Step(k, 0.25 * k, k == 0 ? Pose2() : u, z);
+  int count = 0, discarded = 0;
+  constexpr int kSeeds = 12;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const ChangedRingRun run = RunChangedRing({.changed_from_m = 5.0,
+                                               .changed_to_m = 28.0,
+                                               .scale_sigma = 0.01,
+                                               .turn_sigma_rad = 0.002,
+                                               .seed = seed,
+                                               .changed_words = 200});
+    for (const CatGraphStep& step : run.steps) {
+      discarded += static_cast<int>(step.discarded.size() + step.lost.size());
       for (const InferredClosure& c : step.inferred) {
         if (c.node - step.reference_node < 100) continue;
-        // Node ids are frame indices; the location lies between its edge's ends.
-        const GraphEdge& e = filter.graph().edge(c.location.edge);
-        const double at_m = RingWorld::kStep * (e.from + c.location.alpha * (e.to - e.from));
-        const double error = RingDistanceM(at_m, c.node * RingWorld::kStep);
+        const double error = RingDistanceM(RingPositionM(run.graph, c.location), c.node * RingWorld::kStep);
         sum_sq += error * error;
         ++count;
       }
     }
   }
   const double rms = count > 0 ? std::sqrt(sum_sq / count) : 0.0;
-  INFO(count << " inferences 10 m or more into the change, rms error " << rms << " m");
-  CHECK(count >= 4 * 100);
-  CHECK(rms <= 0.3);
+  INFO(count << " inferences 10 m or more into the change, rms error " << rms << " m; " << discarded
+             << " inferences discarded");
+  CHECK(count >= kSeeds * 100);
+  CHECK(rms <= 0.25);
+  CHECK(discarded == 0);
+}
+
+TEST_CASE("At a visual closure O starts from V's particles within d_h of the match, factor copies each",
+          "[frontend][catgraph][catgraph-plus]") {
+  RingWorld world;
+  const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
+  const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
+  // The spec (§3.5: a copy of V), and the default.
+  for (const auto& [seed_local, factor] : {std::pair{false, 1}, std::pair{true, 5}}) {
+    CAPTURE(seed_local, factor);
+    CatGraphOptions options;
+    options.num_particles = 500;
+    options.new_place_log_offset = 0.0;
+    options.odometric_seed_local = seed_local;
+    options.odometric_particle_factor = factor;
+    CatGraphFilter filter(model, options);
+    int closures = 0;
+    long left_out = 0;  // V's particles farther than d_h from the match
+    for (int k = 0; k < 2 * per_lap && closures < 20; ++k) {
+      const CatGraphStep step =
+          filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), world.Observe(k * RingWorld::kStep));
+      if (!step.closure) continue;
+      ++closures;
+      CAPTURE(k);
+      const std::vector<Particle>& v = filter.particles();
+      const std::vector<Particle>& o = filter.odometric_particles();
+      const double match_m = RingPositionM(filter.graph(), step.best);
+      // Within d_h in the local graph, which lays the ring's arc out along
+      // its chords: 1 m of arc and its chord differ by 0.5 mm.
+      const double d_h = options.hypothesis_radius_m;
+      auto near = [&](const Particle& p, double slack) {
+        return RingDistanceM(RingPositionM(filter.graph(), {p.edge, p.alpha}), match_m) <= d_h + slack;
+      };
+      const auto inside = std::count_if(v.begin(), v.end(), [&](const Particle& p) { return near(p, -1e-3); });
+      const auto reachable = std::count_if(v.begin(), v.end(), [&](const Particle& p) { return near(p, 1e-3); });
+      if (!seed_local) {
+        REQUIRE(o.size() == v.size());
+        for (std::size_t i = 0; i < o.size(); ++i) {
+          CHECK(o[i].edge == v[i].edge);
+          CHECK(o[i].alpha == v[i].alpha);
+          CHECK(o[i].direction == v[i].direction);
+        }
+      } else {
+        left_out += static_cast<long>(v.size()) - reachable;
+        CHECK(static_cast<long>(o.size()) >= factor * inside);
+        CHECK(static_cast<long>(o.size()) <= factor * reachable);
+        for (const Particle& p : o) CHECK(near(p, 1e-3));
+        for (std::size_t i = 0; i < o.size(); i += static_cast<std::size_t>(factor)) {
+          for (int c = 1; c < factor; ++c) {
+            CHECK(o[i + static_cast<std::size_t>(c)].edge == o[i].edge);
+            CHECK(o[i + static_cast<std::size_t>(c)].alpha == o[i].alpha);
+          }
+        }
+      }
+      double total = 0.0;
+      for (const Particle& p : o) total += std::exp(p.log_weight);
+      CHECK(total == Approx(1.0).epsilon(1e-9));
+    }
+    CHECK(closures == 20);
+    INFO(left_out << " of V's particles left out");
+    if (seed_local) CHECK(left_out > 0);  // the test tells the two apart
+  }
 }
 
 TEST_CASE("Total-path validation weighs the odometric hypothesis at the validating frame, not the one before",
@@ -387,7 +467,7 @@ TEST_CASE("Pending inferences a sequence break drops are reported, not lost sile
   // closure before the stretch.
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   const int gap = per_lap + static_cast<int>(13.0 / RingWorld::kStep);
-  const ChangedRingRun run = RunChangedRing(true, gap);
+  const ChangedRingRun run = RunChangedRing({.gap_frame = gap});
   REQUIRE(run.steps[static_cast<std::size_t>(gap - 1)].inference_pending);
   const CatGraphStep& at = run.steps[static_cast<std::size_t>(gap)];
   REQUIRE_FALSE(at.lost.empty());
@@ -413,7 +493,7 @@ TEST_CASE("Pending inferences a sequence break drops are reported, not lost sile
 
 TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone makes them",
           "[frontend][catgraph][catgraph-plus]") {
-  const ChangedRingRun with = RunChangedRing(true), without = RunChangedRing(false);
+  const ChangedRingRun with = RunChangedRing({}), without = RunChangedRing({.odometric_inference = false});
   REQUIRE(with.steps.size() == without.steps.size());
   int visual = 0;
   for (std::size_t k = 0; k < with.steps.size(); ++k) {
@@ -681,6 +761,11 @@ TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") 
     CHECK_NOTHROW(Validate(o));
     (*o.new_place_motion_sigma)[2] = bad;
     CHECK_THROWS_WITH(Validate(o), Catch::Contains("new_place_motion_sigma"));
+  }
+  for (const int bad : {0, 101}) {
+    o = CatGraphOptions{};
+    o.odometric_particle_factor = bad;
+    CHECK_THROWS_WITH(Validate(o), Catch::Contains("odometric_particle_factor"));
   }
   CHECK_NOTHROW(Validate(CatGraphOptions{}));
 }
