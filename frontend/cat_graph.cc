@@ -496,7 +496,8 @@ std::pair<int, Pose2> CatGraphFilter::LoopTo(const LocationHypothesis& h) {
 void CatGraphFilter::ReinitialiseOdometric(const LocationHypothesis& match) {
   // §3.5 copies V; here only V's particles within d_h of the match, each
   // copied `odometric_particle_factor` times (CatGraphOptions). The match is
-  // the centre of Eq 4's disc, a particle's own place, so one is always kept.
+  // the weighted mean of the particles in Eq 4's winning disc, so it has
+  // particles near; should none lie within d_h, O is the spec's copy of V.
   std::vector<Particle>& seeds = odometric_seeds_;
   seeds.clear();
   if (options_.odometric_seed_local) {
