@@ -332,7 +332,7 @@ TEST_CASE("CAT-Graph+ follows the robot along the old path through 23 m of chang
   // of the step along, 0.002 rad per frame). The odometric hypothesis
   // diffuses with the filter's Q; 10 m and more after the last visual
   // closure its inferences stay within a few steps of the truth. Over filter
-  // seeds 1-40 the rms of those inferences is, per seed, 0.05-0.51 m: the
+  // seeds 1-40 the rms of those inferences is, per seed, 0.03-0.36 m: the
   // centre of O's cloud walks along the track with each resampling. Pooled
   // over seeds 1-12 (measured 2026-12-03): 0.189 m at the defaults, 0.217 m
   // with one copy of each visual particle. Seeded from all of V, five copies
