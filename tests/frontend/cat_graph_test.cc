@@ -255,11 +255,12 @@ struct ChangedRingRun {
   TrajectoryGraph graph;  // node ids are frame indices
   int per_lap = 0;
 };
-ChangedRingRun RunChangedRing(const ChangedRing& ring, CatGraphOptions options = {}) {
+ChangedRingRun RunChangedRing(const ChangedRing& ring) {
   RingWorld world;
   const std::vector<WordSet> training = world.Lap();
   const int changed_word = RingWorld::Words();  // words beyond the ring's
   const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + ring.changed_words), FabMapOptions{});
+  CatGraphOptions options;
   options.num_particles = 500;
   options.new_place_log_offset = 0.0;
   options.odometric_inference = ring.odometric_inference;
