@@ -242,11 +242,13 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
     double weight;
   };
   std::vector<EdgeGroup> groups;
+  weight_.resize(order_.size());  // the particles' weights, in order_
   for (std::size_t k = 0; k < order_.size(); ++k) {
     const Particle& p = particles[order_[k]];
     if (groups.empty() || groups.back().edge != p.edge) groups.push_back({p.edge, k, k, 0.0});
     groups.back().end = k + 1;
-    groups.back().weight += std::exp(p.log_weight);
+    weight_[k] = std::exp(p.log_weight);
+    groups.back().weight += weight_[k];
   }
   auto group_of = [&](int edge) -> const EdgeGroup* {
     const auto it = std::lower_bound(groups.begin(), groups.end(), edge,
@@ -293,7 +295,9 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
       if (other == nullptr) continue;
       for (std::size_t q = other->begin; q < other->end; ++q) {
         const Particle& p = particles[order_[q]];
-        nearby.push_back({Interpolate(s.from, s.to, p.alpha).translation(), std::exp(p.log_weight), p.direction});
+        // Interpolate's translation, without its heading (a wrap per particle).
+        const Eigen::Vector2d a = s.from.translation();
+        nearby.push_back({a + p.alpha * (s.to.translation() - a), weight_[q], p.direction});
       }
     }
     for (const auto& [bin, i] : bins) {

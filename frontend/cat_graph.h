@@ -300,6 +300,7 @@ class CatGraphFilter {
   LocalGraphBuilder builder_;
   LocalGraph local_;                       // scratch
   std::vector<std::size_t> order_;         // scratch: particle indices by edge
+  std::vector<double> weight_;             // scratch: their weights, in order_
   std::vector<double> node_ll_;            // this step's log p(z | L_m) ...
   std::vector<std::int64_t> node_ll_step_; // ... valid where equal to steps_
   std::int64_t steps_ = 0;
