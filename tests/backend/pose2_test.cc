@@ -35,6 +35,22 @@ TEST_CASE("WrapAngle maps every angle into the half-open interval from -pi to pi
   }
 }
 
+TEST_CASE("WrapAngle returns an angle already in range unchanged, to the last bit", "[graph][pose2]") {
+  // What std::remainder gives for it, so skipping the call changes no result.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> angle(-kPi, kPi);
+  for (int i = 0; i < kTrials; ++i) {
+    const double a = angle(rng);
+    REQUIRE(WrapAngle(a) == a);
+    REQUIRE(std::remainder(a, 2.0 * kPi) == a);
+  }
+  const double just_above_minus_pi = std::nextafter(-kPi, 0.0);
+  CHECK(WrapAngle(just_above_minus_pi) == just_above_minus_pi);
+  CHECK(WrapAngle(kPi) == kPi);
+  CHECK(WrapAngle(-kPi) == kPi);
+  CHECK(WrapAngle(std::nextafter(kPi, 4.0)) < 0.0);
+}
+
 TEST_CASE("Pose2 headings just either side of pi compose across the cut", "[graph][pose2]") {
   const Pose2 a(0.0, 0.0, kPi - 0.1);
   const Pose2 b(0.0, 0.0, 0.2);
