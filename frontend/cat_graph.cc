@@ -295,9 +295,7 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
       if (other == nullptr) continue;
       for (std::size_t q = other->begin; q < other->end; ++q) {
         const Particle& p = particles[order_[q]];
-        // Interpolate's translation, without its heading (a wrap per particle).
-        const Eigen::Vector2d a = s.from.translation();
-        nearby.push_back({a + p.alpha * (s.to.translation() - a), weight_[q], p.direction});
+        nearby.push_back({InterpolateTranslation(s.from, s.to, p.alpha), weight_[q], p.direction});
       }
     }
     for (const auto& [bin, i] : bins) {

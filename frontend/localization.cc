@@ -120,9 +120,9 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   auto location_error = [&](std::size_t k, const LocationHypothesis& h) {
     if (truth.empty() || h.edge < 0) return kNoError;
     const GraphEdge& e = filter.graph().edge(h.edge);
-    const Eigen::Vector2d a = truth[static_cast<std::size_t>(frame_of(e.from))].translation();
-    const Eigen::Vector2d b = truth[static_cast<std::size_t>(frame_of(e.to))].translation();
-    return (truth[k].translation() - (a + h.alpha * (b - a))).norm();
+    const Pose2& a = truth[static_cast<std::size_t>(frame_of(e.from))];
+    const Pose2& b = truth[static_cast<std::size_t>(frame_of(e.to))];
+    return (truth[k].translation() - InterpolateTranslation(a, b, h.alpha)).norm();
   };
 
   std::map<int, int> visual_closure_of_frame;  // frame -> closure id

@@ -64,9 +64,13 @@ class Pose2 {
 // arc. t = 0 gives a, t = 1 gives b (up to angle wrapping). This is the
 // interpolation CAT-Graph uses along an edge (spec §2.2); t outside [0, 1]
 // extrapolates.
+// Its translation alone (no heading to wrap: the particle filters' hot path).
+inline Eigen::Vector2d InterpolateTranslation(const Pose2& a, const Pose2& b, double t) {
+  return a.translation() + t * (b.translation() - a.translation());
+}
 inline Pose2 Interpolate(const Pose2& a, const Pose2& b, double t) {
-  return {a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()),
-          a.theta() + t * WrapAngle(b.theta() - a.theta())};
+  const Eigen::Vector2d p = InterpolateTranslation(a, b, t);
+  return {p.x(), p.y(), a.theta() + t * WrapAngle(b.theta() - a.theta())};
 }
 
 }  // namespace catgraph
