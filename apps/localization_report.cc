@@ -316,6 +316,17 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-offset", f.new_place_log_offset,
                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
       ->capture_default_str();
+  cmd.add_option("--new-place-stay-fraction", f.new_place_stay_fraction,
+                 "What staying on the map costs, as a fraction of the offset (constant and relative parts), "
+                 "which is what entering it costs. docs/frontend.md \"Staying on the map\"")
+      ->check([](const std::string& text) -> std::string {
+        // CLI::Range lets NaN through (every comparison with it is false).
+        double value = 0.0;
+        return CLI::detail::lexical_cast(text, value) && value >= 0.0 && value <= 1.0
+                   ? std::string()
+                   : "Value " + text + " not in range [0, 1]";
+      })
+      ->capture_default_str();
   cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
                  "Also added to log p(z | new place): this fraction of the frame's self-evidence (how much better "
                  "than the mean field a node with exactly its words explains it)")

@@ -76,6 +76,9 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
   if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
+  if (!(o.new_place_stay_fraction >= 0.0 && o.new_place_stay_fraction <= 1.0)) {
+    fail("new_place_stay_fraction must be in [0, 1]");
+  }
   if (!(o.new_place_relative_offset >= 0.0 && o.new_place_relative_offset < 1.0)) {
     fail("new_place_relative_offset must be in [0, 1)");
   }
@@ -378,10 +381,21 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   };
   // Prior mass of new place: p_new while the robot was in a new place, the
   // leave probability while it was on the map, mixed by last step's posterior
-  // [D, docs/frontend.md].
-  const double prior_new =
-      mapped_mass_ * options_.leave_probability + (1.0 - mapped_mass_) * options_.new_place_prior;
-  const double log_keep = std::log(1.0 - prior_new);
+  // [D, docs/frontend.md]. The offset, charged to new place in Eq 6 below, is
+  // what entering the map costs; staying on it costs only a fraction of that,
+  // so the mass carried on the map is credited the rest
+  // [D, docs/frontend.md "Staying on the map"].
+  double offset = options_.new_place_log_offset;
+  if (options_.new_place_relative_offset > 0.0) {
+    offset += options_.new_place_relative_offset * likelihood.SelfEvidence(words);
+  }
+  const double h = options_.leave_probability;
+  const double prior_new = mapped_mass_ * h + (1.0 - mapped_mass_) * options_.new_place_prior;
+  const double stay_credit = (1.0 - options_.new_place_stay_fraction) * offset;
+  const double log_keep =
+      stay_credit == 0.0 ? std::log(1.0 - prior_new)
+                         : LogSumExp(std::log(mapped_mass_ * (1.0 - h)) + stay_credit,
+                                     std::log((1.0 - mapped_mass_) * (1.0 - options_.new_place_prior)));
   if (!restart) MotionAndProjection(particles_, u, rng_);
   double log_mixture = kNegInf;  // log sum_i w_i p(z | particle i), for log_evidence
   for (Particle& p : particles_) {
@@ -403,10 +417,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   step.log_evidence = log_mixture == kNegInf ? std::numeric_limits<double>::quiet_NaN()
                                              : log_mixture - likelihood.LogNewPlaceLikelihood();
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
-  double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + options_.new_place_log_offset;
-  if (options_.new_place_relative_offset > 0.0) {
-    log_new += options_.new_place_relative_offset * likelihood.SelfEvidence(words);
-  }
+  double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + offset;
   if (!restart) {
     // Welford's running mean and spread of the odometry.
     ++u_count_;

@@ -288,6 +288,15 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
   }
 }
 
+TEST_CASE("localize refuses a stay fraction outside [0, 1], by name", "[apps][localize][bad-input]") {
+  for (const std::string fraction : {"1.5", "-0.1", "nan", "half"}) {
+    const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", fraction});
+    CAPTURE(fraction, r.err);
+    CHECK(r.status != 0);
+    CHECK(r.err.find("--new-place-stay-fraction") != std::string::npos);
+  }
+}
+
 TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {
   const auto dir = testing::TempDir("cli_sweep");
   REQUIRE(Run({"generate-graph", "-o", (dir / "g.g2o").string(), "--truth",

@@ -237,6 +237,58 @@ TEST_CASE("the relative new-place offset is c times the frame's self-evidence", 
   CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_relative_offset"));
 }
 
+// The stay fraction credits the map's carried mass (1 - f) times the offset
+// against the mass entering from a new place. Until a step begins with mass
+// on the map the credit is zero and the filters agree; at that step the odds
+// of new place differ by exactly the credit's share of the map's prior.
+TEST_CASE("a stay fraction credits the mass carried on the map, not the mass entering it", "[frontend][catgraph]") {
+  RingWorld world;
+  const std::vector<WordSet> training = world.Lap();
+  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
+  std::vector<WordSet> frames;
+  for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
+  constexpr double kOffset = 6.0;
+  auto run = [&](double stay_fraction) {
+    CatGraphOptions options;
+    options.num_particles = 200;
+    options.odometric_gate = false;
+    options.new_place_log_offset = kOffset;
+    options.new_place_stay_fraction = stay_fraction;
+    CatGraphFilter filter(model, options);
+    std::vector<CatGraphStep> steps;
+    for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
+      steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), frames[k]));
+      if (steps.back().new_place_probability < 1.0 && steps.size() >= 2 &&
+          steps[steps.size() - 2].new_place_probability < 1.0) {
+        break;  // the second step with mass on the map
+      }
+    }
+    return steps;
+  };
+  constexpr double kFraction = 0.25;
+  const std::vector<CatGraphStep> one = run(1.0), credited = run(kFraction);
+  REQUIRE(one.size() == credited.size());
+  REQUIRE(one.size() >= 2);
+  const std::size_t k = one.size() - 1;
+  // The step before: no mass on the map at its start, so no credit yet.
+  CHECK(credited[k - 1].new_place_probability == Approx(one[k - 1].new_place_probability).epsilon(1e-12));
+  const double mapped = 1.0 - one[k - 1].new_place_probability;
+  REQUIRE(mapped > 1e-6);
+  const CatGraphOptions defaults;
+  const double h = defaults.leave_probability, p_new = defaults.new_place_prior;
+  const double keep_one = mapped * (1.0 - h) + (1.0 - mapped) * (1.0 - p_new);
+  const double keep_credited =
+      mapped * (1.0 - h) * std::exp((1.0 - kFraction) * kOffset) + (1.0 - mapped) * (1.0 - p_new);
+  auto log_odds = [](double p) { return std::log(p) - std::log1p(-p); };
+  const double credit = log_odds(one[k].new_place_probability) - log_odds(credited[k].new_place_probability);
+  CHECK(credit > 1e-3);  // it did something
+  CHECK(credit == Approx(std::log(keep_credited / keep_one)).margin(1e-9));
+
+  CatGraphOptions bad;
+  bad.new_place_stay_fraction = 1.5;
+  CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_stay_fraction"));
+}
+
 // Two laps of the ring; on the second, a stretch looks new (words no
 // training image has), as a refurnished corridor does.
 struct ChangedRing {
