@@ -190,17 +190,25 @@ TEST_CASE("A forward camera turned against the map makes no visual closure while
   CHECK(reversed_closures == 0);                      // but that is not recognition
 }
 
+// The ring's model, trained on one lap, and the first 120 frames a filter sees.
+struct TrainedRing {
+  RingWorld world;
+  FabMapModel model;
+  std::vector<WordSet> frames;
+  TrainedRing() : model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{}) {
+    for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
+  }
+};
+
 // The relative offset adds c times the frame's self-evidence (how much
 // better than the mean field a node with exactly its words explains it) to
 // log p(z | new place): at the first frame with particles on the map, c
 // gives what a constant offset of c · self-evidence gives. The filters agree
 // until then (no particles, new place certain), so the states are the same.
 TEST_CASE("the relative new-place offset is c times the frame's self-evidence", "[frontend][catgraph]") {
-  RingWorld world;
-  const std::vector<WordSet> training = world.Lap();
-  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
-  std::vector<WordSet> frames;
-  for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
+  const TrainedRing ring;
+  const FabMapModel& model = ring.model;
+  const std::vector<WordSet>& frames = ring.frames;
   // The first step on the map, as seen by a filter with these offsets.
   auto first_on_map = [&](double constant, double relative, int stop_at) {
     CatGraphOptions options;
@@ -242,11 +250,9 @@ TEST_CASE("the relative new-place offset is c times the frame's self-evidence", 
 // on the map the credit is zero and the filters agree; at that step the odds
 // of new place differ by exactly the credit's share of the map's prior.
 TEST_CASE("a stay fraction credits the mass carried on the map, not the mass entering it", "[frontend][catgraph]") {
-  RingWorld world;
-  const std::vector<WordSet> training = world.Lap();
-  const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words()), FabMapOptions{});
-  std::vector<WordSet> frames;
-  for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
+  const TrainedRing ring;
+  const FabMapModel& model = ring.model;
+  const std::vector<WordSet>& frames = ring.frames;
   constexpr double kOffset = 6.0;
   auto run = [&](double stay_fraction) {
     CatGraphOptions options;
