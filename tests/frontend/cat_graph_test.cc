@@ -198,6 +198,14 @@ struct TrainedRing {
   TrainedRing() : model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{}) {
     for (int k = 0; k < 120; ++k) frames.push_back(world.Observe(k * RingWorld::kStep));
   }
+  // A small filter that may go anywhere on the ring, with this offset.
+  static CatGraphOptions Options(double new_place_log_offset) {
+    CatGraphOptions options;
+    options.num_particles = 200;
+    options.odometric_gate = false;
+    options.new_place_log_offset = new_place_log_offset;
+    return options;
+  }
 };
 
 // The relative offset adds c times the frame's self-evidence (how much
@@ -211,10 +219,7 @@ TEST_CASE("the relative new-place offset is c times the frame's self-evidence", 
   const std::vector<WordSet>& frames = ring.frames;
   // The first step on the map, as seen by a filter with these offsets.
   auto first_on_map = [&](double constant, double relative, int stop_at) {
-    CatGraphOptions options;
-    options.num_particles = 200;
-    options.odometric_gate = false;
-    options.new_place_log_offset = constant;
+    CatGraphOptions options = TrainedRing::Options(constant);
     options.new_place_relative_offset = relative;
     CatGraphFilter filter(model, options);
     for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
@@ -255,10 +260,7 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   const std::vector<WordSet>& frames = ring.frames;
   constexpr double kOffset = 6.0;
   auto run = [&](double stay_fraction) {
-    CatGraphOptions options;
-    options.num_particles = 200;
-    options.odometric_gate = false;
-    options.new_place_log_offset = kOffset;
+    CatGraphOptions options = TrainedRing::Options(kOffset);
     options.new_place_stay_fraction = stay_fraction;
     CatGraphFilter filter(model, options);
     std::vector<CatGraphStep> steps;
