@@ -317,8 +317,8 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "Added to log p(z | new place), nats (0: the spec's mean field as written)")
       ->capture_default_str();
   cmd.add_option("--new-place-stay-fraction", f.new_place_stay_fraction,
-                 "What staying on the map costs, as a fraction of the offset (constant and relative parts), "
-                 "which is what entering it costs. docs/frontend.md \"Staying on the map\"")
+                 "What staying on the map costs, once on it, as a fraction of the offset (constant and relative "
+                 "parts), which is what entering it costs. docs/frontend.md \"Staying on the map\"")
       ->check([](const std::string& text) -> std::string {
         // CLI::Range lets NaN through (every comparison with it is false).
         double value = 0.0;

@@ -382,16 +382,18 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // Prior mass of new place: p_new while the robot was in a new place, the
   // leave probability while it was on the map, mixed by last step's posterior
   // [D, docs/frontend.md]. The offset, charged to new place in Eq 6 below, is
-  // what entering the map costs; staying on it costs only a fraction of that,
-  // so the mass carried on the map is credited the rest
-  // [D, docs/frontend.md "Staying on the map"].
+  // what entering the map costs; once the robot is on it (half the mass or
+  // more), staying costs only a fraction of that, so the mass carried on is
+  // credited the rest [D, docs/frontend.md "Staying on the map"]. Mass that
+  // has just entered is not: else a frame a little under the offset followed
+  // by a middling one would enter, as a lagging cloud re-entering does.
   double offset = options_.new_place_log_offset;
   if (options_.new_place_relative_offset > 0.0) {
     offset += options_.new_place_relative_offset * likelihood.SelfEvidence(words);
   }
   const double h = options_.leave_probability;
   const double prior_new = mapped_mass_ * h + (1.0 - mapped_mass_) * options_.new_place_prior;
-  const double stay_credit = (1.0 - options_.new_place_stay_fraction) * offset;
+  const double stay_credit = mapped_mass_ >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
   const double log_keep =
       stay_credit == 0.0 ? std::log(1.0 - prior_new)
                          : LogSumExp(std::log(mapped_mass_ * (1.0 - h)) + stay_credit,

@@ -105,9 +105,10 @@ struct CatGraphOptions {
   // What staying on the map costs, as a fraction of what entering it costs
   // [D, docs/frontend.md "Staying on the map"]: the offset above (constant
   // and relative parts) is charged in full against the map's mass entering
-  // from a new place, and this fraction of it against the mass carried on
-  // the map from the last frame. [0, 1]; 1: one offset for both (as the
-  // offset was first introduced).
+  // from a new place, and, once the robot is on the map (at least half the
+  // mass there last frame), only this fraction of it against the mass
+  // carried on. [0, 1]; 1: one offset for both (as the offset was first
+  // introduced).
   double new_place_stay_fraction = 1.0;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   // Eq 6's σ under both models (under `spread`, the floor under the
