@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <memory>
@@ -321,10 +322,10 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "parts), which is what entering it costs. docs/frontend.md \"Staying on the map\"")
       ->check([](const std::string& text) -> std::string {
         // CLI::Range lets NaN through (every comparison with it is false).
-        double value = 0.0;
-        return CLI::detail::lexical_cast(text, value) && value >= 0.0 && value <= 1.0
-                   ? std::string()
-                   : "Value " + text + " not in range [0, 1]";
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0';
+        return number && value >= 0.0 && value <= 1.0 ? std::string() : "Value " + text + " not in range [0, 1]";
       })
       ->capture_default_str();
   cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
