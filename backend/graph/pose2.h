@@ -60,14 +60,16 @@ class Pose2 {
   double theta_ = 0.0;
 };
 
+// The translation of Interpolate below, alone: no heading to wrap, for the
+// particle filters' hot path.
+inline Eigen::Vector2d InterpolateTranslation(const Pose2& a, const Pose2& b, double t) {
+  return a.translation() + t * (b.translation() - a.translation());
+}
+
 // Decoupled interpolation: translation linearly, heading along the shorter
 // arc. t = 0 gives a, t = 1 gives b (up to angle wrapping). This is the
 // interpolation CAT-Graph uses along an edge (spec §2.2); t outside [0, 1]
 // extrapolates.
-// Its translation alone (no heading to wrap: the particle filters' hot path).
-inline Eigen::Vector2d InterpolateTranslation(const Pose2& a, const Pose2& b, double t) {
-  return a.translation() + t * (b.translation() - a.translation());
-}
 inline Pose2 Interpolate(const Pose2& a, const Pose2& b, double t) {
   const Eigen::Vector2d p = InterpolateTranslation(a, b, t);
   return {p.x(), p.y(), a.theta() + t * WrapAngle(b.theta() - a.theta())};
