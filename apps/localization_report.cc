@@ -356,6 +356,10 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "spec's copy of the visual filter)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
+  AddSigmaOption(cmd, "--odometric-motion-sigma", "--motion-sigma's",
+                 "CAT-Graph+: the odometric filter's Q, σ per frame (m, m, rad). docs/catgraph-plus.md \"O's "
+                 "along-track wander\"",
+                 [&f](const Eigen::Vector3d& s) { f.odometric_motion_sigma = s; });
   cmd.add_flag("--odometric-seed-all", [&f](std::int64_t) { f.odometric_seed_local = false; },
                "CAT-Graph+: the odometric filter starts from every visual particle (the spec), not only those within "
                "d_h of the visual match");

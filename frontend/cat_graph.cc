@@ -72,6 +72,9 @@ void Validate(const CatGraphOptions& o) {
   if (o.new_place_motion_sigma && !IsValidSigma(*o.new_place_motion_sigma)) {
     fail("new_place_motion_sigma must be finite and > 0");
   }
+  if (o.odometric_motion_sigma && !IsValidSigma(*o.odometric_motion_sigma)) {
+    fail("odometric_motion_sigma must be finite and > 0");
+  }
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
@@ -184,14 +187,14 @@ void CatGraphFilter::SeedUniformly(std::size_t count, std::vector<Particle>& out
   }
 }
 
-void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const Pose2& u, std::mt19937_64& rng) {
+void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const Pose2& u,
+                                         const Eigen::Vector3d& s, std::mt19937_64& rng) {
   // Particles in order of their edge's start node, so that each local graph
   // is built once per step.
   order_.resize(particles.size());
   for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
   auto anchor = [&](std::size_t i) { return graph_.edge(particles[i].edge).from; };
   std::stable_sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return anchor(a) < anchor(b); });
-  const Eigen::Vector3d& s = options_.motion_sigma;
   std::normal_distribution<double> normal(0.0, 1.0);
   int built = -1;
   for (const std::size_t i : order_) {
@@ -398,7 +401,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
       stay_credit == 0.0 ? std::log(1.0 - prior_new)
                          : LogSumExp(std::log(mapped_mass_ * (1.0 - h)) + stay_credit,
                                      std::log((1.0 - mapped_mass_) * (1.0 - options_.new_place_prior)));
-  if (!restart) MotionAndProjection(particles_, u, rng_);
+  if (!restart) MotionAndProjection(particles_, u, options_.motion_sigma, rng_);
   double log_mixture = kNegInf;  // log sum_i w_i p(z | particle i), for log_evidence
   for (Particle& p : particles_) {
     if (p.log_weight == kNegInf) continue;
@@ -572,8 +575,8 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
   if (reference_node_ < 0) return;  // no visual closure yet: nothing to infer from
 
   // The odometric filter: same motion and projection, position-only weights
-  // (Eq 8), resampled without new places.
-  MotionAndProjection(odometric_, u, odometric_rng_);
+  // (Eq 8), resampled without new places; Q its own if set.
+  MotionAndProjection(odometric_, u, options_.odometric_motion_sigma.value_or(options_.motion_sigma), odometric_rng_);
   double log_total = kNegInf;
   for (const Particle& p : odometric_) log_total = LogSumExp(log_total, p.log_weight);
   if (log_total == kNegInf) {  // every particle left the graph: nothing to infer until the next closure

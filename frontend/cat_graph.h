@@ -154,13 +154,21 @@ struct CatGraphOptions {
   // (1: the spec); [1, 100].
   bool odometric_seed_local = true;
   int odometric_particle_factor = 5;
+  // The odometric filter's Q, σ per frame (m, m, rad) [D, docs/catgraph-plus.md
+  // "O's along-track wander"]: O has no observation, so each resampling
+  // moves its cloud along the path by about Q's along-track σ, and its
+  // hypothesis wanders. O only needs Q to cover how the odometry of the
+  // two traversals differs, which can be less than what the visual filter
+  // needs. Unset: motion_sigma (the spec: the same propagation as V).
+  // Finite and > 0 when set. V never depends on it.
+  std::optional<Eigen::Vector3d> odometric_motion_sigma;
   std::uint64_t seed = 1;
 };
 
 // Throws std::invalid_argument naming the first field out of range.
 void Validate(const CatGraphOptions& options);
 
-// Whether every entry of a σ (motion_sigma, new_place_motion_sigma) is
+// Whether every entry of a σ (motion_sigma, new_place_motion_sigma, ...) is
 // finite and > 0.
 bool IsValidSigma(const Eigen::Vector3d& sigma);
 
@@ -276,8 +284,10 @@ class CatGraphFilter {
   // exclusion windows and inside the odometric gate.
   bool Eligible(int node) const;
   void SeedUniformly(std::size_t count, std::vector<Particle>& out);
-  // Moves the particles by u plus noise and projects them back; adds log Eq 1.
-  void MotionAndProjection(std::vector<Particle>& particles, const Pose2& u, std::mt19937_64& rng);
+  // Moves the particles by u plus noise of σ `sigma` and projects them back;
+  // adds log Eq 1 (with the same σ).
+  void MotionAndProjection(std::vector<Particle>& particles, const Pose2& u, const Eigen::Vector3d& sigma,
+                           std::mt19937_64& rng);
   LocationHypothesis BestHypothesis(const std::vector<Particle>& particles);
   // The pose of a hypothesis (heading turned by π for direction −1) in the
   // local graph `local_` holds.

@@ -275,7 +275,7 @@ TEST_CASE("evaluate names the file at fault", "[apps][evaluate][bad-input]") {
 
 TEST_CASE("localize refuses a motion noise that is not three positive numbers, by name", "[apps][localize][bad-input]") {
   // Parsing fails before the dataset is read: no dataset is needed.
-  for (const std::string option : {"--motion-sigma", "--new-place-motion-sigma"}) {
+  for (const std::string option : {"--motion-sigma", "--new-place-motion-sigma", "--odometric-motion-sigma"}) {
     for (const std::vector<std::string>& sigma :
          {std::vector<std::string>{"0.02", "nan", "0.02"}, {"0.02", "-0.05", "0.02"}, {"0.02", "0.05"}}) {
       std::vector<std::string> args = {"localize", "no-such-dataset", "-o", "unused", option};
