@@ -188,7 +188,7 @@ void CatGraphFilter::SeedUniformly(std::size_t count, std::vector<Particle>& out
 }
 
 void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const Pose2& u,
-                                         const Eigen::Vector3d& s, std::mt19937_64& rng) {
+                                         const Eigen::Vector3d& sigma, std::mt19937_64& rng) {
   // Particles in order of their edge's start node, so that each local graph
   // is built once per step.
   order_.resize(particles.size());
@@ -213,7 +213,7 @@ void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const
     // One draw per statement: a call's arguments are evaluated in an
     // unspecified order, and a seed must give the same particles with every
     // compiler (heading first: the order GCC used, so results stay as measured).
-    const double w_theta = s[2] * normal(rng), w_y = s[1] * normal(rng), w_x = s[0] * normal(rng);
+    const double w_theta = sigma[2] * normal(rng), w_y = sigma[1] * normal(rng), w_x = sigma[0] * normal(rng);
     const Pose2 noisy(u.x() + w_x, u.y() + w_y, u.theta() + w_theta);
     const Pose2 y = x * noisy;
     const auto projection = ProjectOntoLocalGraph(local_, y);
@@ -227,7 +227,7 @@ void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const
     p.edge = projection->edge;
     p.alpha = projection->alpha;
     p.direction = direction;
-    p.log_weight += PositionLogLikelihood(x, y, Pose2(projection->pose.x(), projection->pose.y(), heading), s,
+    p.log_weight += PositionLogLikelihood(x, y, Pose2(projection->pose.x(), projection->pose.y(), heading), sigma,
                                           options_.heading_in_position_likelihood);
   }
 }
