@@ -411,6 +411,7 @@ void CheckSameVisualStep(const CatGraphStep& a, const CatGraphStep& b) {
 // (1 % of the step along, 0.002 rad per frame), over filter seeds 1-12:
 // the inferences 10 m or more after their visual closure, by their error
 // along the ring.
+constexpr int kDeepSeeds = 12;
 struct DeepInferences {
   int count = 0, discarded = 0;
   double rms_m = 0.0;
@@ -418,7 +419,7 @@ struct DeepInferences {
 DeepInferences RunDeepChange(const std::optional<Eigen::Vector3d>& odometric_motion_sigma) {
   double sum_sq = 0.0;
   DeepInferences deep;
-  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+  for (std::uint64_t seed = 1; seed <= kDeepSeeds; ++seed) {
     const ChangedRingRun run = RunChangedRing({.changed_from_m = 5.0,
                                                .changed_to_m = 28.0,
                                                .scale_sigma = 0.01,
@@ -444,7 +445,7 @@ DeepInferences RunDeepChange(const std::optional<Eigen::Vector3d>& odometric_mot
 void CheckDeepInferences(const DeepInferences& deep, double max_rms_m) {
   INFO(deep.count << " inferences 10 m or more into the change, rms error " << deep.rms_m << " m; "
                   << deep.discarded << " inferences discarded");
-  CHECK(deep.count >= 12 * 100);
+  CHECK(deep.count >= kDeepSeeds * 100);
   CHECK(deep.rms_m <= max_rms_m);
   CHECK(deep.discarded == 0);
 }
