@@ -300,6 +300,21 @@ void AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& d
       ->default_str(default_text);
 }
 
+// A fraction in [0, 1], or [0, 1) without `one`. CLI::Range lets NaN
+// through (every comparison with it is false), so the text is read here.
+CLI::Validator Fraction(bool one) {
+  return CLI::Validator(
+      [one](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0';
+        return number && value >= 0.0 && (one ? value <= 1.0 : value < 1.0)
+                   ? std::string()
+                   : "Value " + text + " not in range [0, 1" + (one ? "]" : ")");
+      },
+      one ? "[0, 1]" : "[0, 1)");
+}
+
 }  // namespace
 
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
@@ -320,17 +335,16 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-stay-fraction", f.new_place_stay_fraction,
                  "What staying on the map costs, once on it, as a fraction of the offset (constant and relative "
                  "parts), which is what entering it costs. docs/frontend.md \"Staying on the map\"")
-      ->check([](const std::string& text) -> std::string {
-        // CLI::Range lets NaN through (every comparison with it is false).
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0';
-        return number && value >= 0.0 && value <= 1.0 ? std::string() : "Value " + text + " not in range [0, 1]";
-      })
+      ->check(Fraction(true))
       ->capture_default_str();
   cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
                  "Also added to log p(z | new place): this fraction of the frame's self-evidence (how much better "
                  "than the mean field a node with exactly its words explains it)")
+      ->capture_default_str();
+  cmd.add_option("--new-place-stay-relative-offset", f.new_place_stay_relative_offset,
+                 "Staying on the map also costs this fraction of the frame's self-evidence (at most what entering "
+                 "costs). docs/frontend.md \"Staying on the map\"")
+      ->check(Fraction(false))
       ->capture_default_str();
   cmd.add_option_function<std::string>(
          "--new-place-motion", [&f](const std::string& name) { f.new_place_motion = *NewPlaceMotionFromString(name); },

@@ -85,6 +85,9 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.new_place_relative_offset >= 0.0 && o.new_place_relative_offset < 1.0)) {
     fail("new_place_relative_offset must be in [0, 1)");
   }
+  if (!(o.new_place_stay_relative_offset >= 0.0 && o.new_place_stay_relative_offset < 1.0)) {
+    fail("new_place_stay_relative_offset must be in [0, 1)");
+  }
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
@@ -390,13 +393,19 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // credited the rest [D, docs/frontend.md "Staying on the map"]. Mass that
   // has just entered is not: else a frame a little under the offset followed
   // by a middling one would enter, as a lagging cloud re-entering does.
-  double offset = options_.new_place_log_offset;
-  if (options_.new_place_relative_offset > 0.0) {
-    offset += options_.new_place_relative_offset * likelihood.SelfEvidence(words);
-  }
+  // Staying can also cost a fraction of the frame's self-evidence, never
+  // more than entering costs: a frame of a bare wall, with few words, scores
+  // little anywhere, the true place included; a frame of a changed place has
+  // many words and scores little at the true place only.
+  const bool relative = options_.new_place_relative_offset > 0.0 || options_.new_place_stay_relative_offset > 0.0;
+  const double self_evidence = relative ? likelihood.SelfEvidence(words) : 0.0;
+  const double offset = options_.new_place_log_offset + options_.new_place_relative_offset * self_evidence;
   const double h = options_.leave_probability;
   const double prior_new = mapped_mass_ * h + (1.0 - mapped_mass_) * options_.new_place_prior;
-  const double stay_credit = mapped_mass_ >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
+  double stay_credit = mapped_mass_ >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
+  if (mapped_mass_ >= 0.5 && options_.new_place_stay_relative_offset > 0.0) {
+    stay_credit = std::max(0.0, stay_credit - options_.new_place_stay_relative_offset * self_evidence);
+  }
   const double log_keep =
       stay_credit == 0.0 ? std::log(1.0 - prior_new)
                          : LogSumExp(std::log(mapped_mass_ * (1.0 - h)) + stay_credit,

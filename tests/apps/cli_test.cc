@@ -288,13 +288,26 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
   }
 }
 
-TEST_CASE("localize refuses a stay fraction outside [0, 1], by name", "[apps][localize][bad-input]") {
+TEST_CASE("localize refuses a stay fraction or a stay relative offset out of range, by name",
+          "[apps][localize][bad-input]") {
   for (const std::string fraction : {"1.5", "-0.1", "nan", "half"}) {
     const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", fraction});
     CAPTURE(fraction, r.err);
     CHECK(r.status != 0);
     CHECK(r.err.find("--new-place-stay-fraction") != std::string::npos);
   }
+  for (const std::string fraction : {"1", "-0.1", "nan", "half"}) {
+    const Result r =
+        Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-relative-offset", fraction});
+    CAPTURE(fraction, r.err);
+    CHECK(r.status != 0);
+    CHECK(r.err.find("--new-place-stay-relative-offset") != std::string::npos);
+  }
+  // In range, the options parse and the dataset is looked for.
+  const Result ok = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", "1",
+                         "--new-place-stay-relative-offset", "0.99"});
+  CHECK(ok.status != 0);
+  CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
 
 TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {

@@ -258,14 +258,17 @@ TEST_CASE("the relative new-place offset is c times the frame's self-evidence", 
 // (half the mass or more). Until a step begins so, the filters agree, even
 // on steps that begin with some mass on the map; at that step the odds of
 // new place differ by exactly the credit's share of the map's prior.
-TEST_CASE("a stay fraction credits the mass carried on the map, not the mass entering it", "[frontend][catgraph]") {
+TEST_CASE("a stay fraction credits the mass carried on the map, not the mass entering it, less a stay relative "
+          "offset's share of the self-evidence",
+          "[frontend][catgraph]") {
   const TrainedRing ring(450);  // into the second lap
   const FabMapModel& model = ring.model;
   const std::vector<WordSet>& frames = ring.frames;
   constexpr double kOffset = 6.0;
-  auto run = [&](double stay_fraction) {
+  auto run = [&](double stay_fraction, double stay_relative = 0.0) {
     CatGraphOptions options = TrainedRing::Options(kOffset);
     options.new_place_stay_fraction = stay_fraction;
+    options.new_place_stay_relative_offset = stay_relative;
     CatGraphFilter filter(model, options);
     std::vector<CatGraphStep> steps;
     for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
@@ -300,9 +303,31 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   CHECK(credit > 1.0);  // it did something
   CHECK(credit == Approx(std::log(keep_credited / keep_one)).margin(1e-9));
 
+  // A stay relative offset takes that fraction of the frame's self-evidence
+  // off the credit, down to none (staying then costs what entering costs).
+  const double self = model.ForFrame(frames[k]).SelfEvidence(frames[k]);
+  const double full = (1.0 - kFraction) * kOffset;
+  REQUIRE(self > full);  // so that a fraction under 1 can take all of it
+  for (const double stay_relative : {0.5 * full / self, 0.99}) {
+    CAPTURE(stay_relative);
+    const std::vector<CatGraphStep> relative = run(kFraction, stay_relative);
+    REQUIRE(relative.size() == one.size());
+    for (std::size_t i = 0; i < k; ++i) CHECK(relative[i].new_place_probability == one[i].new_place_probability);
+    const double expected = std::max(0.0, full - stay_relative * self);
+    const double keep = mapped * (1.0 - h) * std::exp(expected) + (1.0 - mapped) * (1.0 - p_new);
+    CHECK(log_odds(one[k].new_place_probability) - log_odds(relative[k].new_place_probability) ==
+          Approx(std::log(keep / keep_one)).margin(1e-9));
+    if (expected == 0.0) CHECK(relative[k].new_place_probability == one[k].new_place_probability);
+  }
+
   CatGraphOptions bad;
   bad.new_place_stay_fraction = 1.5;
   CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_stay_fraction"));
+  bad = CatGraphOptions{};
+  for (const double stay_relative : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bad.new_place_stay_relative_offset = stay_relative;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_stay_relative_offset"));
+  }
 }
 
 // Two laps of the ring; on the second, a stretch looks new (words no
