@@ -315,6 +315,19 @@ CLI::Validator Fraction(bool one) {
       one ? "[0, 1]" : "[0, 1)");
 }
 
+// A finite number >= 0 (CLI::NonNegativeNumber lets NaN through).
+CLI::Validator NonNegative() {
+  return CLI::Validator(
+      [](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0';
+        return number && std::isfinite(value) && value >= 0.0 ? std::string()
+                                                              : "Value " + text + " is not a finite number >= 0";
+      },
+      "NONNEGATIVE");
+}
+
 }  // namespace
 
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
@@ -340,6 +353,12 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
                  "Also added to log p(z | new place): this fraction of the frame's self-evidence (how much better "
                  "than the mean field a node with exactly its words explains it)")
+      ->capture_default_str();
+  cmd.add_option("--observation-window", f.observation_window_m,
+                 "Eq 2 over a stretch of path: a node's likelihood is the mean over the nodes within this many "
+                 "metres of path either side (0: its own, the spec). docs/frontend.md \"What stays and what "
+                 "changes\"")
+      ->check(NonNegative())
       ->capture_default_str();
   cmd.add_option("--new-place-stay-relative-offset", f.new_place_stay_relative_offset,
                  "Staying on the map also costs this fraction of the frame's self-evidence (at most what entering "

@@ -90,6 +90,9 @@ void Validate(const CatGraphOptions& o) {
   }
   if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
   if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
+  if (!(o.observation_window_m >= 0.0 && std::isfinite(o.observation_window_m))) {
+    fail("observation_window_m must be finite and >= 0");
+  }
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
   if (!(o.local_validation_m > 0.0 && o.total_validation_m > 0.0)) fail("d_loc and d_tot must be > 0");
   if (!(o.odometric_particle_factor >= 1 && o.odometric_particle_factor <= 100)) {
@@ -377,13 +380,41 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   ++steps_;
   node_ll_.resize(graph_.nodes().size());
   node_ll_step_.resize(graph_.nodes().size(), 0);
-  auto node_ll = [&](int n) {
+  auto own_ll = [&](int n) {
     const auto i = static_cast<std::size_t>(n);
     if (node_ll_step_[i] != steps_) {
       node_ll_step_[i] = steps_;
       node_ll_[i] = likelihood.LogLikelihood(graph_.node(n).words);
     }
     return node_ll_[i];
+  };
+  // Eq 2's node likelihood: the node's own, or the mean over the eligible
+  // nodes within the observation window along the path.
+  window_ll_.resize(graph_.nodes().size());
+  window_ll_step_.resize(graph_.nodes().size(), 0);
+  auto node_ll = [&](int n) {
+    if (options_.observation_window_m == 0.0) return own_ll(n);
+    const auto i = static_cast<std::size_t>(n);
+    if (window_ll_step_[i] != steps_) {
+      window_ll_step_[i] = steps_;
+      const GraphNode& centre = graph_.node(n);
+      double sum = own_ll(n);
+      int count = 1;
+      for (const int step_dir : {-1, 1}) {
+        for (int m = n + step_dir; m >= 0 && m < static_cast<int>(graph_.nodes().size()); m += step_dir) {
+          const GraphNode& node = graph_.node(m);
+          if (std::abs(node.time_s - graph_.node(m - step_dir).time_s) > options_.sequence_break_s ||
+              std::abs(node.path_length_m - centre.path_length_m) > options_.observation_window_m) {
+            break;
+          }
+          if (!Eligible(m)) continue;
+          sum = LogSumExp(sum, own_ll(m));
+          ++count;
+        }
+      }
+      window_ll_[i] = sum - std::log(static_cast<double>(count));
+    }
+    return window_ll_[i];
   };
   // Prior mass of new place: p_new while the robot was in a new place, the
   // leave probability while it was on the map, mixed by last step's posterior

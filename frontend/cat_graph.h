@@ -142,6 +142,14 @@ struct CatGraphOptions {
   // camera cannot have recognised what it did not see [D, docs/frontend.md].
   // False for a panoramic camera (spec Eq 2 as written).
   bool forward_camera = true;
+  // Eq 2 over a stretch of path [D, docs/frontend.md "What stays and what
+  // changes"]: a node's likelihood is the mean of those of the eligible
+  // nodes within this many metres of path on either side of it (none across
+  // a sequence break). A camera on a line beside the map's sees a corner's
+  // walls as the map saw them a little earlier or later, and the images pull
+  // the particles that far along the path; within the window they do not,
+  // and the odometry holds the cloud. >= 0; 0: the node's own (the spec).
+  double observation_window_m = 0.0;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
 
   // CAT-Graph+ (spec §3; the paper's Table II): an odometry-only particle
@@ -327,6 +335,8 @@ class CatGraphFilter {
   std::vector<double> weight_;             // scratch: their weights, in order_
   std::vector<double> node_ll_;            // this step's log p(z | L_m) ...
   std::vector<std::int64_t> node_ll_step_; // ... valid where equal to steps_
+  std::vector<double> window_ll_;            // the same over observation_window_m ...
+  std::vector<std::int64_t> window_ll_step_; // ... valid where equal to steps_
   std::int64_t steps_ = 0;
   double mapped_mass_ = 0.0;
 

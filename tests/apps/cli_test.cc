@@ -288,7 +288,7 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
   }
 }
 
-TEST_CASE("localize refuses a stay fraction or a stay relative offset out of range, by name",
+TEST_CASE("localize refuses a stay fraction, a stay relative offset or an observation window out of range, by name",
           "[apps][localize][bad-input]") {
   for (const std::string fraction : {"1.5", "-0.1", "nan", "half"}) {
     const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", fraction});
@@ -303,9 +303,15 @@ TEST_CASE("localize refuses a stay fraction or a stay relative offset out of ran
     CHECK(r.status != 0);
     CHECK(r.err.find("--new-place-stay-relative-offset") != std::string::npos);
   }
+  for (const std::string window : {"-0.1", "nan", "inf", "wide"}) {
+    const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--observation-window", window});
+    CAPTURE(window, r.err);
+    CHECK(r.status != 0);
+    CHECK(r.err.find("--observation-window") != std::string::npos);
+  }
   // In range, the options parse and the dataset is looked for.
   const Result ok = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", "1",
-                         "--new-place-stay-relative-offset", "0.99"});
+                         "--new-place-stay-relative-offset", "0.99", "--observation-window", "0.4"});
   CHECK(ok.status != 0);
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
