@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -300,30 +301,33 @@ void AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& d
       ->default_str(default_text);
 }
 
-// A fraction in [0, 1], or [0, 1) without `one`. CLI::Range lets NaN
-// through (every comparison with it is false), so the text is read here.
+// The whole text as a number; NaN if it is not one. CLI11's Range and
+// NonNegativeNumber let NaN through (every comparison with it is false), so
+// the validators below read the text themselves.
+double ParseNumber(const std::string& text) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0' ? value : std::numeric_limits<double>::quiet_NaN();
+}
+
+// A fraction in [0, 1], or [0, 1) without `one`.
 CLI::Validator Fraction(bool one) {
   return CLI::Validator(
       [one](const std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0';
-        return number && value >= 0.0 && (one ? value <= 1.0 : value < 1.0)
+        const double value = ParseNumber(text);
+        return value >= 0.0 && (one ? value <= 1.0 : value < 1.0)
                    ? std::string()
                    : "Value " + text + " not in range [0, 1" + (one ? "]" : ")");
       },
       one ? "[0, 1]" : "[0, 1)");
 }
 
-// A finite number >= 0 (CLI::NonNegativeNumber lets NaN through).
+// A finite number >= 0.
 CLI::Validator NonNegative() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
-        char* end = nullptr;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0';
-        return number && std::isfinite(value) && value >= 0.0 ? std::string()
-                                                              : "Value " + text + " is not a finite number >= 0";
+        const double value = ParseNumber(text);
+        return std::isfinite(value) && value >= 0.0 ? std::string() : "Value " + text + " is not a finite number >= 0";
       },
       "NONNEGATIVE");
 }
