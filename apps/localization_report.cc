@@ -339,6 +339,11 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   AddVocabularyOptions(cmd, o);
   cmd.add_option("--particles", f.num_particles, "n_p")->capture_default_str();
   cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
+  cmd.add_option("--closure-min-evidence", f.closure_min_evidence,
+                 "A visual closure also needs the frame's evidence to be this fraction of its self-evidence or more "
+                 "(0: T_h alone, the spec). docs/frontend.md \"Closing on what the camera sees\"")
+      ->check(Fraction(true))
+      ->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
   AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),
                  "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)",
@@ -379,6 +384,9 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean "
                  "(under spread, the floor under the odometry's spread). docs/frontend.md \"Corners and Q\"",
                  [&f](const Eigen::Vector3d& s) { f.new_place_motion_sigma = s; });
+  cmd.add_flag("--no-heading-likelihood", [&f](std::int64_t) { f.heading_in_position_likelihood = false; },
+               "Eq 1 on position alone (spec §6.4 (a)): Q's heading term still spreads the particles but weighs "
+               "none. docs/frontend.md \"Closing on what the camera sees\"");
   cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
                "Let particles onto nodes that dead reckoning rules out");
   cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();

@@ -67,6 +67,7 @@ void Validate(const CatGraphOptions& o) {
   auto fail = [](const std::string& what) { throw std::invalid_argument("CatGraphOptions: " + what); };
   if (o.num_particles < 1) fail("num_particles must be >= 1");
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
+  if (!(o.closure_min_evidence >= 0.0 && o.closure_min_evidence <= 1.0)) fail("closure_min_evidence must be in [0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
   if (!IsValidSigma(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
   if (o.new_place_motion_sigma && !IsValidSigma(*o.new_place_motion_sigma)) {
@@ -428,7 +429,8 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // more than entering costs: a frame of a bare wall, with few words, scores
   // little anywhere, the true place included; a frame of a changed place has
   // many words and scores little at the true place only.
-  const bool relative = options_.new_place_relative_offset > 0.0 || options_.new_place_stay_relative_offset > 0.0;
+  const bool relative = options_.new_place_relative_offset > 0.0 ||
+                        options_.new_place_stay_relative_offset > 0.0 || options_.closure_min_evidence > 0.0;
   const double self_evidence = relative ? likelihood.SelfEvidence(words) : 0.0;
   const double offset = options_.new_place_log_offset + options_.new_place_relative_offset * self_evidence;
   const double h = options_.leave_probability;
@@ -506,7 +508,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // saw: its particles carry no visual evidence (the mean field above), only
   // the odometry's, and their hypothesis is no visual closure.
   const bool seen = !(options_.forward_camera && step.best.direction < 0);
-  const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold && seen;
+  // Nor is a cloud that scores little on what the camera sees (NaN, no
+  // particle on the map, fails too).
+  const bool recognised =
+      options_.closure_min_evidence == 0.0 || step.log_evidence >= options_.closure_min_evidence * self_evidence;
+  const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold && seen && recognised;
   if (aliasing.false_match >= 0 || (confident && !aliasing.withhold_closure)) {
     step.closure = true;
     std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);

@@ -80,6 +80,14 @@ std::vector<std::string> NewPlaceMotionNames();
 struct CatGraphOptions {
   int num_particles = 1000;                // n_p; >= 1
   double closure_threshold = 0.8;          // T_h on Eq 4; (0, 1]
+  // A visual closure also needs the frame's evidence (CatGraphStep's
+  // log_evidence: how much better the particles explain it than the mean
+  // field) to be at least this fraction of its self-evidence (what a node
+  // with exactly its words would score) [D, docs/frontend.md "Closing on
+  // what the camera sees"]: a cloud that the odometry holds together
+  // through a changed place is still no recognition. [0, 1]; 0: Eq 4 and
+  // T_h alone (the spec).
+  double closure_min_evidence = 0.0;
   double hypothesis_radius_m = 1.0;        // d_h; > 0
   Eigen::Vector3d motion_sigma{0.05, 0.05, 0.005};  // Q = diag(σ)², per frame (m, m, rad); > 0
   double ess_threshold = 0.3;              // T_ess, a fraction of n_p; (0, 1]

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/catch.h"
@@ -288,30 +289,27 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
   }
 }
 
-TEST_CASE("localize refuses a stay fraction, a stay relative offset or an observation window out of range, by name",
+TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observation window or a closure evidence "
+          "fraction out of range, by name",
           "[apps][localize][bad-input]") {
-  for (const std::string fraction : {"1.5", "-0.1", "nan", "half"}) {
-    const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", fraction});
-    CAPTURE(fraction, r.err);
-    CHECK(r.status != 0);
-    CHECK(r.err.find("--new-place-stay-fraction") != std::string::npos);
-  }
-  for (const std::string fraction : {"1", "-0.1", "nan", "half"}) {
-    const Result r =
-        Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-relative-offset", fraction});
-    CAPTURE(fraction, r.err);
-    CHECK(r.status != 0);
-    CHECK(r.err.find("--new-place-stay-relative-offset") != std::string::npos);
-  }
-  for (const std::string window : {"-0.1", "nan", "inf", "wide"}) {
-    const Result r = Run({"localize", "no-such-dataset", "-o", "unused", "--observation-window", window});
-    CAPTURE(window, r.err);
-    CHECK(r.status != 0);
-    CHECK(r.err.find("--observation-window") != std::string::npos);
+  const std::vector<std::pair<std::string, std::vector<std::string>>> bad = {
+      {"--new-place-stay-fraction", {"1.5", "-0.1", "nan", "half"}},
+      {"--new-place-stay-relative-offset", {"1", "-0.1", "nan", "half"}},
+      {"--observation-window", {"-0.1", "nan", "inf", "wide"}},
+      {"--closure-min-evidence", {"1.5", "-0.1", "nan", "a fifth"}},
+  };
+  for (const auto& [option, values] : bad) {
+    for (const std::string& value : values) {
+      const Result r = Run({"localize", "no-such-dataset", "-o", "unused", option, value});
+      CAPTURE(option, value, r.err);
+      CHECK(r.status != 0);
+      CHECK(r.err.find(option) != std::string::npos);
+    }
   }
   // In range, the options parse and the dataset is looked for.
   const Result ok = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", "1",
-                         "--new-place-stay-relative-offset", "0.99", "--observation-window", "0.4"});
+                         "--new-place-stay-relative-offset", "0.99", "--observation-window", "0.4",
+                         "--closure-min-evidence", "1", "--no-heading-likelihood"});
   CHECK(ok.status != 0);
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
