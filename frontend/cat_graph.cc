@@ -429,9 +429,10 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // more than entering costs: a frame of a bare wall, with few words, scores
   // little anywhere, the true place included; a frame of a changed place has
   // many words and scores little at the true place only.
-  const bool relative = options_.new_place_relative_offset > 0.0 ||
-                        options_.new_place_stay_relative_offset > 0.0 || options_.closure_min_evidence > 0.0;
-  const double self_evidence = relative ? likelihood.SelfEvidence(words) : 0.0;
+  const bool needs_self_evidence = options_.new_place_relative_offset > 0.0 ||
+                                   options_.new_place_stay_relative_offset > 0.0 ||
+                                   options_.closure_min_evidence > 0.0;
+  const double self_evidence = needs_self_evidence ? likelihood.SelfEvidence(words) : 0.0;
   const double offset = options_.new_place_log_offset + options_.new_place_relative_offset * self_evidence;
   const double h = options_.leave_probability;
   const double prior_new = mapped_mass_ * h + (1.0 - mapped_mass_) * options_.new_place_prior;
