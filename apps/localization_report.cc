@@ -387,6 +387,9 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_flag("--no-heading-likelihood", [&f](std::int64_t) { f.heading_in_position_likelihood = false; },
                "Eq 1 on position alone (spec §6.4 (a)): Q's heading term still spreads the particles but weighs "
                "none. docs/frontend.md \"Closing on what the camera sees\"");
+  cmd.add_flag("--hold-after-closure", f.hold_after_closure,
+               "Hold the robot on the map (leave probability, stay credit) only once the cloud has made a visual "
+               "closure since it came onto the map. docs/frontend.md \"Held after a closure\"");
   cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
                "Let particles onto nodes that dead reckoning rules out");
   cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();

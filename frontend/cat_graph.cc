@@ -355,6 +355,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     reference_node_ = -1;
     lost = std::move(pending_);
     pending_.clear();
+    closed_since_entry_ = false;
   }
   time_s_ = time_s;
   if (!first) path_length_m_ += u.translation().norm();
@@ -434,16 +435,19 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
                                    options_.closure_min_evidence > 0.0;
   const double self_evidence = needs_self_evidence ? likelihood.SelfEvidence(words) : 0.0;
   const double offset = options_.new_place_log_offset + options_.new_place_relative_offset * self_evidence;
+  // The mass that holds the robot on the map: all of it, or under
+  // hold_after_closure none until the cloud has closed since it came on.
+  const double held = options_.hold_after_closure && !closed_since_entry_ ? 0.0 : mapped_mass_;
   const double h = options_.leave_probability;
-  const double prior_new = mapped_mass_ * h + (1.0 - mapped_mass_) * options_.new_place_prior;
-  double stay_credit = mapped_mass_ >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
-  if (mapped_mass_ >= 0.5 && options_.new_place_stay_relative_offset > 0.0) {
+  const double prior_new = held * h + (1.0 - held) * options_.new_place_prior;
+  double stay_credit = held >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
+  if (held >= 0.5 && options_.new_place_stay_relative_offset > 0.0) {
     stay_credit = std::max(0.0, stay_credit - options_.new_place_stay_relative_offset * self_evidence);
   }
   const double log_keep =
       stay_credit == 0.0 ? std::log(1.0 - prior_new)
-                         : LogSumExp(std::log(mapped_mass_ * (1.0 - h)) + stay_credit,
-                                     std::log((1.0 - mapped_mass_) * (1.0 - options_.new_place_prior)));
+                         : LogSumExp(std::log(held * (1.0 - h)) + stay_credit,
+                                     std::log((1.0 - held) * (1.0 - options_.new_place_prior)));
   if (!restart) MotionAndProjection(particles_, u, options_.motion_sigma, rng_);
   double log_mixture = kNegInf;  // log sum_i w_i p(z | particle i), for log_evidence
   for (Particle& p : particles_) {
@@ -481,6 +485,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   for (Particle& p : particles_) p.log_weight -= log_total;
   step.new_place_probability = std::exp(log_new - log_total);
   mapped_mass_ = particles_.empty() ? 0.0 : 1.0 - step.new_place_probability;
+  if (mapped_mass_ < 0.5) closed_since_entry_ = false;  // off the map: the next entry starts afresh
 
   // Location hypothesis and loop closure (Eq 4).
   step.best = BestHypothesis(particles_);
@@ -518,6 +523,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     step.closure = true;
     std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);
     step.loop_edge = graph_.AddEdge(step.node, step.matched_node, step.T_node_matched, EdgeType::kVisualLoop);
+    closed_since_entry_ = mapped_mass_ >= 0.5;
   }
 
   // ESS among the particles (Eq 5); resample with new-place reseeding.

@@ -124,6 +124,14 @@ struct CatGraphOptions {
   // the frame's self-evidence or more, in most changed ones under a tenth.
   // [0, 1); 0: the stay fraction alone.
   double new_place_stay_relative_offset = 0.0;
+  // Whether the robot is held on the map (the leave probability above in
+  // place of p_new, and the stay credit) only once the cloud has made a
+  // visual closure since it came onto the map [D, docs/frontend.md "Held
+  // after a closure"]. A cloud that came on without beating the offset (new
+  // place charged for a turn by Eq 6, say) then still has to beat new place
+  // frame by frame until it closes, and the new place's reseeding can find
+  // the true place meanwhile. False: any mass on the map holds it.
+  bool hold_after_closure = false;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   // Eq 6's σ under both models (under `spread`, the floor under the
   // odometry's spread) [D, docs/frontend.md "Corners and Q"]: how much a
@@ -347,6 +355,7 @@ class CatGraphFilter {
   std::vector<std::int64_t> window_ll_step_; // ... valid where equal to steps_
   std::int64_t steps_ = 0;
   double mapped_mass_ = 0.0;
+  bool closed_since_entry_ = false;        // a visual closure since the mass came onto the map
 
   // CAT-Graph+ state (spec §3.2).
   std::vector<Particle> odometric_;        // the odometric particle set O

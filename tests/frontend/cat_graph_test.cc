@@ -331,6 +331,61 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   }
 }
 
+// Every step's new-place posterior follows from Eq 6 and the mass carried
+// on: on the ring's exact odometry Eq 6's motion term is 0, so the new
+// place's log-odds are log(prior_new / keep) + offset - log_evidence, with
+// prior_new and keep from the mass on the map at the previous step. Under
+// hold_after_closure that mass holds the robot (leave probability, stay
+// credit) only once a visual closure has been made since it came on.
+TEST_CASE("held after a closure: the mass on the map keeps the robot there only once it has closed",
+          "[frontend][catgraph]") {
+  const TrainedRing ring(450);
+  constexpr double kOffset = 6.0, kFraction = 0.25;
+  for (const bool hold : {false, true}) {
+    CAPTURE(hold);
+    CatGraphOptions options = TrainedRing::Options(kOffset);
+    options.new_place_stay_fraction = kFraction;
+    options.hold_after_closure = hold;
+    // Sure to leave within a few frames, so that the cloud comes onto the map
+    // again and again, and closing only on frames it explains well, so that it
+    // is on the map without a closure on some.
+    options.leave_probability = 0.05;
+    options.closure_min_evidence = 0.8;
+    CatGraphFilter filter(ring.model, options);
+    const double h = options.leave_probability, p_new = options.new_place_prior;
+    auto log_odds = [](double p) { return std::log(p) - std::log1p(-p); };
+    double mapped = 0.0;
+    bool closed = false;  // since the mass came onto the map
+    int checked = 0, unheld = 0, held_after_closure = 0;
+    for (int k = 0; k < static_cast<int>(ring.frames.size()); ++k) {
+      CAPTURE(k);
+      const CatGraphStep step = filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), ring.frames[k]);
+      const double held = hold && !closed ? 0.0 : mapped;
+      const double prior_new = held * h + (1.0 - held) * p_new;
+      const double keep = held >= 0.5 ? held * (1.0 - h) * std::exp((1.0 - kFraction) * kOffset) +
+                                            (1.0 - held) * (1.0 - p_new)
+                                      : 1.0 - prior_new;
+      const double p = step.new_place_probability;
+      if (std::isfinite(step.log_evidence) && p > 1e-9 && p < 1.0 - 1e-9) {
+        CHECK(log_odds(p) == Approx(std::log(prior_new / keep) + kOffset - step.log_evidence).margin(1e-6));
+        ++checked;
+        unheld += mapped >= 0.5 && held == 0.0;
+        held_after_closure += hold && held >= 0.5;
+      }
+      mapped = 1.0 - p;
+      if (mapped < 0.5) closed = false;
+      if (step.closure) closed = mapped >= 0.5;
+    }
+    INFO(checked << " steps checked, " << unheld << " on the map unheld, " << held_after_closure
+                 << " held after a closure");
+    CHECK(checked >= 50);
+    if (hold) {  // the rule bit, both ways
+      CHECK(unheld >= 5);
+      CHECK(held_after_closure >= 5);
+    }
+  }
+}
+
 // Two laps of the ring; on the second, a stretch looks new (words no
 // training image has), as a refurnished corridor does.
 struct ChangedRing {
