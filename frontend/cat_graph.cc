@@ -392,8 +392,10 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   };
   // Eq 2's node likelihood: the node's own, or the mean over the eligible
   // nodes within the observation window along the path.
-  window_ll_.resize(graph_.nodes().size());
-  window_ll_step_.resize(graph_.nodes().size(), 0);
+  if (options_.observation_window_m > 0.0) {
+    window_ll_.resize(graph_.nodes().size());
+    window_ll_step_.resize(graph_.nodes().size(), 0);
+  }
   auto node_ll = [&](int n) {
     if (options_.observation_window_m == 0.0) return own_ll(n);
     const auto i = static_cast<std::size_t>(n);
@@ -440,9 +442,12 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const double held = options_.hold_after_closure && !closed_since_entry_ ? 0.0 : mapped_mass_;
   const double h = options_.leave_probability;
   const double prior_new = held * h + (1.0 - held) * options_.new_place_prior;
-  double stay_credit = held >= 0.5 ? (1.0 - options_.new_place_stay_fraction) * offset : 0.0;
-  if (held >= 0.5 && options_.new_place_stay_relative_offset > 0.0) {
-    stay_credit = std::max(0.0, stay_credit - options_.new_place_stay_relative_offset * self_evidence);
+  double stay_credit = 0.0;
+  if (held >= 0.5) {
+    stay_credit = (1.0 - options_.new_place_stay_fraction) * offset;
+    if (options_.new_place_stay_relative_offset > 0.0) {
+      stay_credit = std::max(0.0, stay_credit - options_.new_place_stay_relative_offset * self_evidence);
+    }
   }
   const double log_keep =
       stay_credit == 0.0 ? std::log(1.0 - prior_new)
