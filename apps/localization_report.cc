@@ -399,6 +399,12 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                "CAT-Graph alone: no odometry-inferred closures (CAT-Graph+ is the default)");
   cmd.add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
   cmd.add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
+  cmd.add_option("--total-path-retries", f.total_path_retries,
+                 "CAT-Graph+: carry the pending inferences past this many visual closures in a row that they fail "
+                 "total-path validation against (0: the spec). docs/catgraph-plus.md \"A chain against a false "
+                 "closure\"")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
   cmd.add_option("--odometric-particle-factor", f.odometric_particle_factor,
                  "CAT-Graph+: the odometric filter starts from this many copies of each visual particle (1: the "
                  "spec's copy of the visual filter)")

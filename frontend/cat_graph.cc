@@ -99,6 +99,7 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.odometric_particle_factor >= 1 && o.odometric_particle_factor <= 100)) {
     fail("odometric_particle_factor must be in [1, 100]");
   }
+  if (!(o.total_path_retries >= 0 && o.total_path_retries <= 100)) fail("total_path_retries must be in [0, 100]");
   if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
   if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
@@ -620,15 +621,22 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
         const auto b = HypothesisPose(odometric);
         if (a && b) distance = (a->translation() - (*b * u).translation()).norm();
       }
-      step.reference_node = reference_node_;
-      (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
+      if (distance < options_.total_validation_m || total_path_failures_ == options_.total_path_retries) {
+        step.reference_node = reference_node_;
+        (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
+        pending_.clear();
+      } else {
+        ++total_path_failures_;  // carried past this closure, as past a vetoed one
+      }
     }
-    ReinitialiseOdometric(step.best);
-    reference_node_ = step.node;
-    reference_location_ = step.best;
-    T_since_reference_ = Pose2();
-    pending_.clear();
-    return;
+    if (pending_.empty()) {
+      total_path_failures_ = 0;
+      ReinitialiseOdometric(step.best);
+      reference_node_ = step.node;
+      reference_location_ = step.best;
+      T_since_reference_ = Pose2();
+      return;
+    }
   }
   if (reference_node_ < 0) return;  // no visual closure yet: nothing to infer from
 

@@ -173,6 +173,15 @@ struct CatGraphOptions {
   bool odometric_inference = true;
   double local_validation_m = 2.0;         // d_loc; > 0
   double total_validation_m = 1.0;         // d_tot; > 0
+  // How many visual closures in a row the pending inferences may fail
+  // total-path validation against and still be carried on, O with them, to
+  // the next one [D, docs/catgraph-plus.md "A chain against a false
+  // closure"]. A failure says that the chain or the closure is wrong, not
+  // which; a false visual closure (perceptual aliasing) otherwise discards
+  // the true chain it meets, and the closures it brings then start a false
+  // one. A closure a chain is carried past neither validates, discards nor
+  // re-initialises O (as a vetoed one). [0, 100]; 0: the spec.
+  int total_path_retries = 0;
   // How O is re-initialised at a visual closure (spec §3.5 copies V) [D,
   // docs/frontend.md "The odometric filter's along-track spread"]. O has no
   // observation: its cloud's centre walks along the track with each
@@ -356,6 +365,7 @@ class CatGraphFilter {
   std::int64_t steps_ = 0;
   double mapped_mass_ = 0.0;
   bool closed_since_entry_ = false;        // a visual closure since the mass came onto the map
+  int total_path_failures_ = 0;            // closures in a row the pending chain was carried past
 
   // CAT-Graph+ state (spec §3.2).
   std::vector<Particle> odometric_;        // the odometric particle set O

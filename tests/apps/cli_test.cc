@@ -289,14 +289,15 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
   }
 }
 
-TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observation window or a closure evidence "
-          "fraction out of range, by name",
+TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observation window, a closure evidence "
+          "fraction or a retry count out of range, by name",
           "[apps][localize][bad-input]") {
   const std::vector<std::pair<std::string, std::vector<std::string>>> bad = {
       {"--new-place-stay-fraction", {"1.5", "-0.1", "nan", "half"}},
       {"--new-place-stay-relative-offset", {"1", "-0.1", "nan", "half"}},
       {"--observation-window", {"-0.1", "nan", "inf", "wide"}},
       {"--closure-min-evidence", {"1.5", "-0.1", "nan", "a fifth"}},
+      {"--total-path-retries", {"-1", "101", "1.5", "two"}},
   };
   for (const auto& [option, values] : bad) {
     for (const std::string& value : values) {
@@ -309,7 +310,8 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
   // In range, the options parse and the dataset is looked for.
   const Result ok = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", "1",
                          "--new-place-stay-relative-offset", "0.99", "--observation-window", "0.4",
-                         "--closure-min-evidence", "1", "--no-heading-likelihood"});
+                         "--closure-min-evidence", "1", "--no-heading-likelihood", "--hold-after-closure",
+                         "--total-path-retries", "100"});
   CHECK(ok.status != 0);
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }

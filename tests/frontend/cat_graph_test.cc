@@ -845,24 +845,27 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
 
 // The ring's second lap, 20 m to 22 m along it, taken for 17 m to 19 m of
 // the first by a pair of false matches (node ids are frame indices here);
-// closures at `vetoed` frames are kept out of CAT-Graph+.
+// closures at `vetoed` frames are kept out of CAT-Graph+, and the
+// `withheld_before` frames before the pair close nothing (a changed place).
 struct AliasedRingRun {
   int first = 0, last = 0, back = 0;
   std::vector<CatGraphStep> steps;
 };
 
-AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}) {
+AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}, int withheld_before = 0,
+                              int total_path_retries = 0) {
   RingWorld world;
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options;
   options.num_particles = 500;
   options.new_place_log_offset = 0.0;
+  options.total_path_retries = total_path_retries;
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   AliasedRingRun run{per_lap + 200, per_lap + 220, per_lap + 30, {}};
   for (int k = 0; k <= run.last + 20; ++k) {
     Aliasing aliasing;
-    if (k >= run.first && k <= run.last) aliasing.withhold_closure = true;
+    if (k >= run.first - withheld_before && k <= run.last) aliasing.withhold_closure = true;
     if (k == run.first || k == run.last) aliasing.false_match = k - run.back;
     aliasing.vetoed = vetoed.contains(k);
     run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(),
@@ -949,6 +952,92 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
     carried.insert(c.node);
   }
   for (int k = run.first; k <= run.last; ++k) CHECK(carried.contains(k));
+}
+
+// A changed stretch (no visual closure) runs into the false pair, so that
+// CAT-Graph+'s pending inferences meet a false closure first. Carried past
+// as many failed total-path validations as there are false closures, the
+// chain reaches the first true closure after them and is validated there,
+// exactly as if the false ones had been vetoed; one retry fewer, and the
+// last false closure discards it; none, and the first one does (the spec).
+TEST_CASE("Carried past the closures it fails against, a chain of inferences reaches the true closure after a "
+          "false pair",
+          "[frontend][catgraph][catgraph-plus][false-matches]") {
+  constexpr int kWithheld = 15;
+  const AliasedRingRun plain = RunAliasedRing({}, kWithheld);
+  // The closures the chain fails against: the pair, and those the visual
+  // filter makes while it is still lost after it (3 m off); then the first
+  // true one.
+  std::set<int> failing{plain.first, plain.last};
+  int after = -1, reference = -1;
+  for (int k = 0; k < static_cast<int>(plain.steps.size()); ++k) {
+    const CatGraphStep& s = plain.steps[static_cast<std::size_t>(k)];
+    if (!s.closure) continue;
+    if (k < plain.first) reference = k;
+    if (k <= plain.last) continue;
+    if (RingDistance(k, s.matched_node) > 1.0) {
+      failing.insert(k);
+    } else {
+      after = k;
+      break;
+    }
+  }
+  REQUIRE(reference >= 0);
+  REQUIRE(reference < plain.first - kWithheld);
+  REQUIRE(after > plain.last);
+  const int failures = static_cast<int>(failing.size());
+  INFO(failures << " false closures between the true ones at frames " << reference << " and " << after);
+  // The spec: the first false closure discards the chain from `reference`.
+  const CatGraphStep& met = plain.steps[static_cast<std::size_t>(plain.first)];
+  CHECK(met.reference_node == reference);
+  CHECK(met.discarded.size() >= kWithheld - 1);
+
+  const AliasedRingRun vetoed = RunAliasedRing(failing, kWithheld);
+  const AliasedRingRun carried = RunAliasedRing({}, kWithheld, failures);
+  REQUIRE(carried.steps.size() == vetoed.steps.size());
+  for (std::size_t k = 0; k < carried.steps.size(); ++k) {
+    CAPTURE(k);
+    const CatGraphStep &c = carried.steps[k], &v = vetoed.steps[k];
+    CheckSameVisualStep(c, plain.steps[k]);
+    CHECK(c.inference_pending == v.inference_pending);
+    CHECK(c.reference_node == v.reference_node);
+    CHECK(c.discarded.size() == v.discarded.size());
+    REQUIRE(c.inferred.size() == v.inferred.size());
+    for (std::size_t i = 0; i < c.inferred.size(); ++i) {
+      CHECK(c.inferred[i].node == v.inferred[i].node);
+      CHECK(c.inferred[i].matched_node == v.inferred[i].matched_node);
+    }
+  }
+  const CatGraphStep& end = carried.steps[static_cast<std::size_t>(after)];
+  CHECK(end.reference_node == reference);
+  CHECK(end.discarded.empty());
+  std::set<int> inferred;
+  for (const InferredClosure& c : end.inferred) {
+    CAPTURE(c.node, c.matched_node);
+    CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
+    inferred.insert(c.node);
+  }
+  for (int k = plain.first - kWithheld + 1; k <= plain.last; ++k) CHECK(inferred.contains(k));
+
+  // One retry fewer: the last false closure discards the chain, as it
+  // stood there.
+  const int last_failing = *failing.rbegin();
+  const AliasedRingRun one_short = RunAliasedRing({}, kWithheld, failures - 1);
+  const CatGraphStep& cut = one_short.steps[static_cast<std::size_t>(last_failing)];
+  CHECK(cut.reference_node == reference);
+  std::set<int> discarded, expected;
+  for (const InferredClosure& c : cut.discarded) discarded.insert(c.node);
+  for (const int k : inferred) {
+    if (k < last_failing) expected.insert(k);
+  }
+  CHECK(discarded == expected);
+  CHECK(one_short.steps[static_cast<std::size_t>(after)].reference_node != reference);
+
+  CatGraphOptions bad;
+  for (const int retries : {-1, 101}) {
+    bad.total_path_retries = retries;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("total_path_retries"));
+  }
 }
 
 // New place's probability after a lap of the ring and then one step that
