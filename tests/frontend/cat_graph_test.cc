@@ -881,6 +881,22 @@ AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}, int withheld_bef
   return run;
 }
 
+// The step validates the chain from the closure at `reference`: nothing
+// discarded, every inference within 0.5 m of the truth, frames `from` to
+// `to` among them. Returns the frames inferred.
+std::set<int> CheckValidatedChain(const CatGraphStep& end, int reference, int from, int to) {
+  CHECK(end.reference_node == reference);
+  CHECK(end.discarded.empty());
+  std::set<int> inferred;
+  for (const InferredClosure& c : end.inferred) {
+    CAPTURE(c.node, c.matched_node);
+    CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
+    inferred.insert(c.node);
+  }
+  for (int k = from; k <= to; ++k) CHECK(inferred.contains(k));
+  return inferred;
+}
+
 TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Graph+ carries it between the pair",
           "[frontend][catgraph][catgraph-plus][false-matches]") {
   const AliasedRingRun run = RunAliasedRing();
@@ -942,16 +958,7 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
   // The first closure the back end keeps after the pair validates the whole
   // stretch from the last one before it, where the robot really was.
   REQUIRE(after > run.last);
-  const CatGraphStep& end = run.steps[static_cast<std::size_t>(after)];
-  CHECK(end.reference_node == reference);
-  CHECK(end.discarded.empty());
-  std::set<int> carried;
-  for (const InferredClosure& c : end.inferred) {
-    CAPTURE(c.node, c.matched_node);
-    CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
-    carried.insert(c.node);
-  }
-  for (int k = run.first; k <= run.last; ++k) CHECK(carried.contains(k));
+  CheckValidatedChain(run.steps[static_cast<std::size_t>(after)], reference, run.first, run.last);
 }
 
 // A changed stretch (no visual closure) runs into the false pair, so that
@@ -1008,16 +1015,8 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
       CHECK(c.inferred[i].matched_node == v.inferred[i].matched_node);
     }
   }
-  const CatGraphStep& end = carried.steps[static_cast<std::size_t>(after)];
-  CHECK(end.reference_node == reference);
-  CHECK(end.discarded.empty());
-  std::set<int> inferred;
-  for (const InferredClosure& c : end.inferred) {
-    CAPTURE(c.node, c.matched_node);
-    CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
-    inferred.insert(c.node);
-  }
-  for (int k = plain.first - kWithheld + 1; k <= plain.last; ++k) CHECK(inferred.contains(k));
+  const std::set<int> inferred = CheckValidatedChain(carried.steps[static_cast<std::size_t>(after)], reference,
+                                                      plain.first - kWithheld + 1, plain.last);
 
   // One retry fewer: the last false closure discards the chain, as it
   // stood there.
