@@ -380,16 +380,17 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
          "odometry's own spread: a turn the map does not make takes the robot off it). docs/frontend.md")
       ->check(CLI::IsMember(NewPlaceMotionNames()))
       ->default_str(std::string(ToString(f.new_place_motion)));
-  AddSigmaOption(cmd, "--new-place-motion-sigma", "Q's",
+  AddSigmaOption(cmd, "--new-place-motion-sigma", f.new_place_motion_sigma ? FormatSigma(*f.new_place_motion_sigma) : "Q's",
                  "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean "
                  "(under spread, the floor under the odometry's spread). docs/frontend.md \"Corners and Q\"",
                  [&f](const Eigen::Vector3d& s) { f.new_place_motion_sigma = s; });
   cmd.add_flag("--no-heading-likelihood", [&f](std::int64_t) { f.heading_in_position_likelihood = false; },
                "Eq 1 on position alone (spec §6.4 (a)): Q's heading term still spreads the particles but weighs "
                "none. docs/frontend.md \"Closing on what the camera sees\"");
-  cmd.add_flag("--hold-after-closure", f.hold_after_closure,
+  cmd.add_flag("--hold-after-closure,!--no-hold-after-closure", f.hold_after_closure,
                "Hold the robot on the map (leave probability, stay credit) only once the cloud has made a visual "
-               "closure since it came onto the map. docs/frontend.md \"Held after a closure\"");
+               "closure since it came onto the map (the default; --no-hold-after-closure: any mass on the map "
+               "holds it). docs/frontend.md \"Held after a closure\"");
   cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
                "Let particles onto nodes that dead reckoning rules out");
   cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();

@@ -87,18 +87,21 @@ struct CatGraphOptions {
   // what the camera sees"]: a cloud that the odometry holds together
   // through a changed place is still no recognition. [0, 1]; 0: Eq 4 and
   // T_h alone (the spec).
-  double closure_min_evidence = 0.0;
+  double closure_min_evidence = 0.2;
   double hypothesis_radius_m = 1.0;        // d_h; > 0
-  Eigen::Vector3d motion_sigma{0.05, 0.05, 0.005};  // Q = diag(σ)², per frame (m, m, rad); > 0
+  // Q = diag(σ)², per frame (m, m, rad); > 0. The heading's σ is wider than
+  // the odometry's own heading noise so that the cloud follows a corner the
+  // robot takes a little sooner or later than the map did [D, docs/frontend.md
+  // "Corners and Q"].
+  Eigen::Vector3d motion_sigma{0.05, 0.05, 0.02};
   double ess_threshold = 0.3;              // T_ess, a fraction of n_p; (0, 1]
   double new_place_prior = 0.5;            // p_new (spec §6.3) while in a new place; (0, 1)
   // Prior mass of new place while the robot was localised on the map (the
   // chance of leaving it in one frame) [D]; (0, 1). Small, so that one weak
-  // frame does not take the robot off the map: with the offset below, a
-  // frame must score 45 nats over the mean field to bring it onto the map,
-  // and under 45 - ln((1 - h) / h) = 22 nats (or a few frames under 45) to
-  // take it off (docs/frontend.md).
-  double leave_probability = 1e-10;
+  // frame does not take the robot off the map: ln((1 - h) / h) = 46 nats
+  // for 1e-20, against which the frames score what the stay offset below
+  // leaves them (docs/frontend.md "Leaving the map", "Staying on the map").
+  double leave_probability = 1e-20;
   // Added to log p(z | new place) [D, docs/frontend.md]: FAB-MAP's mean field
   // scores a corridor frame far below the places a few metres along the same
   // corridor, which share its far view. Nats; chosen for 500-word SIFT
@@ -117,13 +120,13 @@ struct CatGraphOptions {
   // mass there last frame), only this fraction of it against the mass
   // carried on. [0, 1]; 1: one offset for both (as the offset was first
   // introduced).
-  double new_place_stay_fraction = 1.0;
+  double new_place_stay_fraction = 0.2;
   // And staying costs this fraction of the frame's self-evidence more (at
   // most what entering costs) [D, docs/frontend.md "Staying on the map"]:
   // in 99 % of the unchanged office frames the true place scores a fifth of
   // the frame's self-evidence or more, in most changed ones under a tenth.
   // [0, 1); 0: the stay fraction alone.
-  double new_place_stay_relative_offset = 0.0;
+  double new_place_stay_relative_offset = 0.08;
   // Whether the robot is held on the map (the leave probability above in
   // place of p_new, and the stay credit) only once the cloud has made a
   // visual closure since it came onto the map [D, docs/frontend.md "Held
@@ -131,13 +134,16 @@ struct CatGraphOptions {
   // place charged for a turn by Eq 6, say) then still has to beat new place
   // frame by frame until it closes, and the new place's reseeding can find
   // the true place meanwhile. False: any mass on the map holds it.
-  bool hold_after_closure = false;
+  bool hold_after_closure = true;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   // Eq 6's σ under both models (under `spread`, the floor under the
   // odometry's spread) [D, docs/frontend.md "Corners and Q"]: how much a
-  // new place is charged for odometry unlike the mean. Unset: Q's σ
-  // (motion_sigma), the spec's reading (§6.3). Finite and > 0 when set.
-  std::optional<Eigen::Vector3d> new_place_motion_sigma;
+  // new place is charged for odometry unlike the mean. The default is the
+  // odometry's own noise (Q's σ before its heading σ was widened for
+  // corners): a turn the map does not make still costs new place what it
+  // did. Unset: Q's σ (motion_sigma), the spec's reading (§6.3). Finite and
+  // > 0 when set.
+  std::optional<Eigen::Vector3d> new_place_motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
   double exclusion_window_s = 10.0;        // nodes younger than this ...
   double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible
   // Odometric gate [D, docs/frontend.md]: a node is not eligible while dead
@@ -165,7 +171,7 @@ struct CatGraphOptions {
   // walls as the map saw them a little earlier or later, and the images pull
   // the particles that far along the path; within the window they do not,
   // and the odometry holds the cloud. >= 0; 0: the node's own (the spec).
-  double observation_window_m = 0.0;
+  double observation_window_m = 0.4;
   bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
 
   // CAT-Graph+ (spec §3; the paper's Table II): an odometry-only particle
@@ -181,7 +187,7 @@ struct CatGraphOptions {
   // the true chain it meets, and the closures it brings then start a false
   // one. A closure a chain is carried past neither validates, discards nor
   // re-initialises O (as a vetoed one). [0, 100]; 0: the spec.
-  int total_path_retries = 0;
+  int total_path_retries = 4;
   // How O is re-initialised at a visual closure (spec §3.5 copies V) [D,
   // docs/frontend.md "The odometric filter's along-track spread"]. O has no
   // observation: its cloud's centre walks along the track with each

@@ -425,10 +425,15 @@ PreparedScenario SimulateAndPrepare(const std::string& scenario, const std::file
 }
 
 // Issue #6's office-static acceptance with the defaults (nothing changes
-// between the traversals), and #7's: CAT-Graph+ leaves CAT-Graph's output as
-// it is, adding inferences only where vision did not close.
-TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and CAT-Graph+ leaves the visual closures "
-          "as they are, adding nothing when held after a closure",
+// between the traversals), and #7's: the paper's claim, "identical in a
+// static environment". The robot held on the map through weak frames, and
+// only once it has closed (docs/frontend.md "Held after a closure"),
+// CAT-Graph closes traversal 2 all but in full (99.5 %), none wrong, and
+// CAT-Graph+ adds nothing: the same visual closures, the same best
+// hypothesis every frame, no inference made or discarded. Measured for
+// filter seeds 1-5; the earlier defaults (no hold, no stay credit) left
+// 18 % of traversal 2 to 257 inferences.
+TEST_CASE("office-static: traversal 2 closes visually all but in full, none wrong, and CAT-Graph+ adds nothing",
           "[apps][localize][slow]") {
   const auto root = testing::TempDir("office_static");
   LocalizeCommandOptions o;
@@ -437,69 +442,27 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
   o.localization.filter.odometric_inference = false;
   const LocalizationResult alone = Localize(d, in.words, in.model, o.localization);
 
-  int second = 0, closed = 0, inferred = 0;
-  std::vector<bool> visual_at(d.frames.size(), false);
+  int second = 0, closed = 0;
   for (const LoopClosure& c : plus.closures) {
-    CAPTURE(c.frame, c.matched_frame);
-    CHECK(c.error_m <= 1.0);
-    if (c.kind == ClosureKind::kVisual) visual_at.at(static_cast<std::size_t>(c.frame)) = true;
-    inferred += c.kind == ClosureKind::kOdometryInferred ? 1 : 0;
-  }
-  for (std::size_t k = 0; k < d.frames.size(); ++k) {
-    if (d.frames[k].traversal != 2) continue;
-    ++second;
-    closed += visual_at[k] ? 1 : 0;
-  }
-  INFO(closed << " of " << second << " traversal-2 frames closed visually; " << inferred << " inferred");
-  CHECK(closed >= 0.8 * second);
-  // The same visual closures, frame for frame, with and without CAT-Graph+.
-  std::vector<LoopClosure> visual_plus;
-  for (const LoopClosure& c : plus.closures) {
-    if (c.kind == ClosureKind::kVisual) visual_plus.push_back(c);
-  }
-  REQUIRE(visual_plus.size() == alone.closures.size());
-  for (std::size_t i = 0; i < visual_plus.size(); ++i) {
-    CHECK(visual_plus[i].frame == alone.closures[i].frame);
-    CHECK(visual_plus[i].matched_frame == alone.closures[i].matched_frame);
-    CHECK(visual_plus[i].hypothesis == alone.closures[i].hypothesis);
-  }
-  for (std::size_t k = 0; k < plus.frames.size(); ++k) {
-    CHECK(plus.frames[k].best.value == alone.frames[k].best.value);
-  }
-
-  // The paper's claim, "identical in a static environment", with the robot
-  // held on the map through weak frames and only once it has closed
-  // (docs/frontend.md "Held after a closure", settings "GE" + hold):
-  // CAT-Graph closes traversal 2 all but in full (99.5 %), none wrong, and
-  // CAT-Graph+ adds nothing. Measured for filter seeds 1-5.
-  CatGraphOptions& f = o.localization.filter;
-  f.leave_probability = 1e-20;
-  f.new_place_stay_fraction = 0.2;
-  f.new_place_stay_relative_offset = 0.08;
-  f.observation_window_m = 0.4;
-  f.closure_min_evidence = 0.2;
-  f.motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.02);
-  f.new_place_motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
-  f.hold_after_closure = true;
-  f.odometric_inference = true;
-  const LocalizationResult held_plus = Localize(d, in.words, in.model, o.localization);
-  f.odometric_inference = false;
-  const LocalizationResult held_alone = Localize(d, in.words, in.model, o.localization);
-  int held_closed = 0;
-  for (const LoopClosure& c : held_plus.closures) {
     CAPTURE(c.frame, c.matched_frame, c.error_m);
     CHECK(c.error_m <= 1.0);
     CHECK(c.kind == ClosureKind::kVisual);
-    held_closed += d.frames.at(static_cast<std::size_t>(c.frame)).traversal == 2 ? 1 : 0;
+    closed += d.frames.at(static_cast<std::size_t>(c.frame)).traversal == 2 ? 1 : 0;
   }
-  INFO(held_closed << " of " << second << " traversal-2 frames closed visually, held after a closure");
-  CHECK(held_closed >= 0.99 * second);
-  REQUIRE(held_plus.closures.size() == held_alone.closures.size());
-  for (std::size_t i = 0; i < held_plus.closures.size(); ++i) {
-    CHECK(held_plus.closures[i].frame == held_alone.closures[i].frame);
-    CHECK(held_plus.closures[i].matched_frame == held_alone.closures[i].matched_frame);
+  for (const DatasetFrame& f : d.frames) second += f.traversal == 2 ? 1 : 0;
+  INFO(closed << " of " << second << " traversal-2 frames closed visually");
+  CHECK(closed >= 0.99 * second);
+  REQUIRE(plus.closures.size() == alone.closures.size());
+  for (std::size_t i = 0; i < plus.closures.size(); ++i) {
+    CHECK(plus.closures[i].frame == alone.closures[i].frame);
+    CHECK(plus.closures[i].matched_frame == alone.closures[i].matched_frame);
+    CHECK(plus.closures[i].hypothesis == alone.closures[i].hypothesis);
   }
-  CHECK(held_plus.discarded_inferences.empty());
+  REQUIRE(plus.frames.size() == alone.frames.size());
+  for (std::size_t k = 0; k < plus.frames.size(); ++k) {
+    CHECK(plus.frames[k].best.value == alone.frames[k].best.value);
+  }
+  CHECK(plus.discarded_inferences.empty());
   std::filesystem::remove_all(root);
 }
 
@@ -509,7 +472,11 @@ TEST_CASE("office-static: most of traversal 2 closes visually, none wrong, and C
 // way round match the turn's shape; the forward camera saw none of what
 // those nodes saw, so their hypothesis is no visual closure. Before that
 // rule (2026-12-03) 49 wrong ones (up to 7.9 m) were made there. Table III's
-// defaults cell (d_tot 1 m, d_loc 2 m): no false inference.
+// defaults cell (d_tot 1 m, d_loc 2 m): no false inference. Nor any
+// inference at all since the robot stays on the map through the weak frames
+// (2026-12-04): the mapped parts of traversal 2 close visually, and in the
+// detour the odometric gate takes the old corridor from the odometric
+// filter, which ends its chain (docs/catgraph-plus.md, Table III).
 TEST_CASE("office-split: no wrong visual closure at the detour's corners and no false inference",
           "[apps][localize][slow]") {
   const auto root = testing::TempDir("office_split");
@@ -522,10 +489,9 @@ TEST_CASE("office-split: no wrong visual closure at the detour's corners and no 
     CHECK(c.error_m <= 1.0);
     (c.kind == ClosureKind::kVisual ? visual : inferred) += 1;
   }
-  // The mapped parts of traversal 2 still close, and CAT-Graph+ fills in.
+  // The mapped parts of traversal 2 still close (1127 at filter seed 1).
   INFO(visual << " visual and " << inferred << " inferred closures");
-  CHECK(visual > 800);
-  CHECK(inferred > 100);
+  CHECK(visual > 1000);
   std::filesystem::remove_all(root);
 }
 
@@ -747,10 +713,12 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
 // Every command of the test above on a 625-frame office
 // (tests/fixtures/office-change-short.yaml): the ones the sanitizer build
 // runs in place of the two full-size office tests (scripts/setup.sh). The
-// short loop leaves CAT-Graph only a few metres before the change, so some of
-// its visual closures are false; the back end must reject those.
-TEST_CASE("every stage of the demo on a short office: false visual closures rejected, the changed corridor "
-          "inferred, the map corrected",
+// short loop leaves CAT-Graph only a few metres before the change; under
+// the earlier defaults (2026-12-03) it made false visual closures there, now
+// none is over 1 m. The false closures the back end must reject are
+// injected, in the hierarchy experiment at the end.
+TEST_CASE("every stage of the demo on a short office: no wrong visual closure, the changed corridor inferred, the "
+          "map corrected, injected false closures rejected",
           "[apps][localize][map]") {
   const auto root = testing::TempDir("demo_short");
   const Result missing = Run({"demo", "-o", (root / "none").string(), "--scenario", "no-such.yaml", "--quiet"});
@@ -766,7 +734,7 @@ TEST_CASE("every stage of the demo on a short office: false visual closures reje
   std::ifstream report_in(out / "report.json");
   const auto report = nlohmann::json::parse(report_in);
   std::map<int, bool> accepted_of;
-  int visual = 0, inferred = 0, false_visual = 0;
+  int visual = 0, inferred = 0;
   for (const auto& c : report.at("closures")) {
     accepted_of[c.at("id").get<int>()] = c.at("accepted").get<bool>();
   }
@@ -783,12 +751,11 @@ TEST_CASE("every stage of the demo on a short office: false visual closures reje
       if (accepted) CHECK(accepted_of.at(c.at("parents")[0].get<int>()));
     } else {
       ++visual;
-      false_visual += e > 2.0 ? 1 : 0;
+      CHECK(e <= 1.0);
     }
   }
   CHECK(visual > 20);
   CHECK(inferred > 50);
-  CHECK(false_visual > 0);
   const double ate_odometry = report.at("ate_odometry").at("rmse_m").get<double>();
   const double ate_corrected = report.at("ate_corrected").at("rmse_m").get<double>();
   CHECK(ate_corrected < 0.5 * ate_odometry);
@@ -841,8 +808,9 @@ TEST_CASE("every stage of the demo on a short office: false visual closures reje
   CHECK(std::stoi(cells.rows[0][2]) == inferred);
   CHECK(cells.rows[0][3] == "0");
 
-  // Injected false matches: all rejected; their children turned off by
-  // cascade and coupled, kept by flat.
+  // Injected false matches: all rejected; none of their children kept by
+  // cascade and coupled. (Flat's back end rejects all 16 here too; it keeps
+  // some in the synthetic graphs of tests/hierarchy.)
   const auto experiment = root / "experiment";
   const Result run = Run({"hierarchy-experiment", data.string(), "-o", experiment.string(), "--seeds", "1",
                           "--inject-false-visual", "3"});
@@ -855,7 +823,7 @@ TEST_CASE("every stage of the demo on a short office: false visual closures reje
     REQUIRE(f.size() == 16);
     CHECK(f[2] == "6");
     CHECK(f[3] == "6");
-    CHECK((std::stoi(f[7]) == 0) == (f[1] != "flat"));
+    if (f[1] != "flat") CHECK(std::stoi(f[7]) == 0);
     // The run without injection is the demo's map (cascade, filter seed 1),
     // feedback re-runs included: they must not bring the false matches back.
     if (f[1] == "cascade") CHECK(std::stod(f[10]) == Approx(ate_corrected).margin(1e-4));
