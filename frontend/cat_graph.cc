@@ -529,7 +529,9 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     step.closure = true;
     std::tie(step.matched_node, step.T_node_matched) = LoopTo(step.best);
     step.loop_edge = graph_.AddEdge(step.node, step.matched_node, step.T_node_matched, EdgeType::kVisualLoop);
-    closed_since_entry_ = mapped_mass_ >= 0.5;
+    // A closure the back end rejected is no recognition: it does not hold
+    // the cloud where it put it (docs/frontend.md "Held after a closure").
+    closed_since_entry_ = mapped_mass_ >= 0.5 && !aliasing.vetoed;
   }
 
   // ESS among the particles (Eq 5); resample with new-place reseeding.

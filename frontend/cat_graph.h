@@ -133,7 +133,8 @@ struct CatGraphOptions {
   // after a closure"]. A cloud that came on without beating the offset (new
   // place charged for a turn by Eq 6, say) then still has to beat new place
   // frame by frame until it closes, and the new place's reseeding can find
-  // the true place meanwhile. False: any mass on the map holds it.
+  // the true place meanwhile. A vetoed closure (Aliasing::vetoed) releases
+  // the hold. False: any mass on the map holds it.
   bool hold_after_closure = true;
   NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
   // Eq 6's σ under both models (under `spread`, the floor under the
@@ -268,7 +269,9 @@ struct Aliasing {
   // CAT-Graph+: it neither validates the pending inferences nor
   // re-initialises the odometric filter, which carries on from the last
   // closure before it. For closures the back end rejected (a re-run of the
-  // front end with the back end's verdict, docs/mapping.md).
+  // front end with the back end's verdict, docs/mapping.md). Nor does it
+  // count as a closure that holds the robot on the map
+  // (CatGraphOptions::hold_after_closure).
   bool vetoed = false;
 };
 

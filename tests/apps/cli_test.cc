@@ -474,9 +474,9 @@ TEST_CASE("office-static: traversal 2 closes visually all but in full, none wron
 // rule (2026-12-03) 49 wrong ones (up to 7.9 m) were made there. Table III's
 // defaults cell (d_tot 1 m, d_loc 2 m): no false inference. Nor any
 // inference at all since the robot stays on the map through the weak frames
-// (2026-12-04): the mapped parts of traversal 2 close visually, and in the
-// detour the odometric gate takes the old corridor from the odometric
-// filter, which ends its chain (docs/catgraph-plus.md, Table III).
+// (2026-12-04): the mapped parts of traversal 2 close visually, and the
+// detour's inferences fail local and total-path validation
+// (docs/catgraph-plus.md, Table III).
 TEST_CASE("office-split: no wrong visual closure at the detour's corners and no false inference",
           "[apps][localize][slow]") {
   const auto root = testing::TempDir("office_split");

@@ -883,13 +883,17 @@ struct AliasedRingRun {
 };
 
 AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}, int withheld_before = 0,
-                              int total_path_retries = 0) {
+                              int total_path_retries = 0, bool held = false) {
   RingWorld world;
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
   options.new_place_log_offset = 0.0;
   options.total_path_retries = total_path_retries;
+  if (held) {  // leaving all but ruled out once the cloud has closed
+    options.leave_probability = 1e-20;
+    options.hold_after_closure = true;
+  }
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   AliasedRingRun run{per_lap + 200, per_lap + 220, per_lap + 30, {}};
@@ -989,6 +993,39 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
   // stretch from the last one before it, where the robot really was.
   REQUIRE(after > run.last);
   CheckValidatedChain(run.steps[static_cast<std::size_t>(after)], reference, run.first, run.last);
+}
+
+// Leaving all but ruled out once the cloud has closed (h = 1e-20, held
+// after a closure), a false pair holds the cloud 3 m off: every frame after
+// it closes there. The same pair vetoed (catgraph map's feedback: the back
+// end rejected it) holds nothing, and new place finds the true place.
+TEST_CASE("Held after a closure: a closure the back end rejected does not hold the cloud where it put it",
+          "[frontend][catgraph][false-matches]") {
+  const AliasedRingRun plain = RunAliasedRing({}, 0, 0, true);
+  const AliasedRingRun vetoed = RunAliasedRing({plain.first, plain.last}, 0, 0, true);
+  REQUIRE(plain.steps.size() == vetoed.steps.size());
+  for (int k = 0; k < plain.first; ++k) {  // the same run up to the pair
+    CAPTURE(k);
+    CheckSameVisualStep(plain.steps[static_cast<std::size_t>(k)], vetoed.steps[static_cast<std::size_t>(k)]);
+  }
+  int plain_false = 0, vetoed_false = 0, vetoed_true = 0;
+  for (int k = plain.last + 1; k < static_cast<int>(plain.steps.size()); ++k) {
+    const CatGraphStep& p = plain.steps[static_cast<std::size_t>(k)];
+    const CatGraphStep& v = vetoed.steps[static_cast<std::size_t>(k)];
+    plain_false += p.closure && RingDistance(k, p.matched_node) > 1.0 ? 1 : 0;
+    vetoed_false += v.closure && RingDistance(k, v.matched_node) > 1.0 ? 1 : 0;
+    vetoed_true += v.closure && RingDistance(k, v.matched_node) <= 0.5 ? 1 : 0;
+  }
+  const int after = static_cast<int>(plain.steps.size()) - plain.last - 1;
+  INFO(after << " frames after the pair: " << plain_false << " false closures held, " << vetoed_false
+             << " false and " << vetoed_true << " true with the pair vetoed");
+  CHECK(plain_false == after);
+  CHECK(vetoed_false == 0);
+  CHECK(vetoed_true >= after - 5);
+  // The frame after the pair: the images no longer agree with where the
+  // pair put the cloud, and unheld, new place takes the mass.
+  CHECK(vetoed.steps[static_cast<std::size_t>(plain.last + 1)].new_place_probability > 0.5);
+  CHECK(plain.steps[static_cast<std::size_t>(plain.last + 1)].new_place_probability < 0.01);
 }
 
 // A changed stretch (no visual closure) runs into the false pair, so that
