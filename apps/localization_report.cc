@@ -380,7 +380,8 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
          "odometry's own spread: a turn the map does not make takes the robot off it). docs/frontend.md")
       ->check(CLI::IsMember(NewPlaceMotionNames()))
       ->default_str(std::string(ToString(f.new_place_motion)));
-  AddSigmaOption(cmd, "--new-place-motion-sigma", f.new_place_motion_sigma ? FormatSigma(*f.new_place_motion_sigma) : "Q's",
+  AddSigmaOption(cmd, "--new-place-motion-sigma",
+                 f.new_place_motion_sigma ? FormatSigma(*f.new_place_motion_sigma) : "Q's",
                  "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean "
                  "(under spread, the floor under the odometry's spread). docs/frontend.md \"Corners and Q\"",
                  [&f](const Eigen::Vector3d& s) { f.new_place_motion_sigma = s; });

@@ -316,6 +316,23 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
 
+TEST_CASE("localize holds after a closure by default; --no-hold-after-closure turns it off, --hold-after-closure "
+          "keeps it",
+          "[apps][localize]") {
+  const auto parse = [](std::vector<std::string> args) {
+    CLI::App app;
+    LocalizeCommandOptions o;
+    AddLocalizationOptions(app, o);
+    std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses a reversed vector
+    app.parse(reversed);
+    return o.localization.filter.hold_after_closure;
+  };
+  CHECK(parse({}));
+  CHECK(parse({"--hold-after-closure"}));
+  CHECK_FALSE(parse({"--no-hold-after-closure"}));
+  CHECK(CatGraphOptions{}.hold_after_closure);
+}
+
 TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {
   const auto dir = testing::TempDir("cli_sweep");
   REQUIRE(Run({"generate-graph", "-o", (dir / "g.g2o").string(), "--truth",
@@ -703,7 +720,13 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
       CHECK(std::stoi(f[7]) == 0);
       CHECK(std::stoi(f[8]) > 0);   // the hierarchy, not the back end alone, turned them off
       CHECK(with <= 1.1 * without);
-      CHECK(with == Approx(oracle).epsilon(0.02));
+      // Feedback does what vetoing the false closures from the start does,
+      // or better: it also vetoes the other closures the back end rejected
+      // (coupled, filter seed 1, since 2026-12-04: frames 3045-3048 at the
+      // map's end, 0.6-0.8 m off, as well; 0.090 m against the oracle's
+      // 0.101 m and 0.101 m without injection; cascade 0.090 m, oracle
+      // 0.089 m).
+      CHECK(with <= 1.02 * oracle);
     }
   }
   CHECK(std::filesystem::exists(experiment / "hierarchy-experiment.md"));
