@@ -877,20 +877,25 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
 // the first by a pair of false matches (node ids are frame indices here);
 // closures at `vetoed` frames are kept out of CAT-Graph+, and the
 // `withheld_before` frames before the pair close nothing (a changed place).
+struct AliasedRing {
+  std::set<int> vetoed = {};
+  int withheld_before = 0;
+  int total_path_retries = 0;
+  bool held = false;  // h = 1e-20, held after a closure: leaving all but ruled out once the cloud has closed
+};
 struct AliasedRingRun {
   int first = 0, last = 0, back = 0;
   std::vector<CatGraphStep> steps;
 };
 
-AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}, int withheld_before = 0,
-                              int total_path_retries = 0, bool held = false) {
+AliasedRingRun RunAliasedRing(const AliasedRing& ring = {}) {
   RingWorld world;
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
   options.new_place_log_offset = 0.0;
-  options.total_path_retries = total_path_retries;
-  if (held) {  // leaving all but ruled out once the cloud has closed
+  options.total_path_retries = ring.total_path_retries;
+  if (ring.held) {
     options.leave_probability = 1e-20;
     options.hold_after_closure = true;
   }
@@ -899,13 +904,13 @@ AliasedRingRun RunAliasedRing(const std::set<int>& vetoed = {}, int withheld_bef
   AliasedRingRun run{per_lap + 200, per_lap + 220, per_lap + 30, {}};
   for (int k = 0; k <= run.last + 20; ++k) {
     Aliasing aliasing;
-    if (k >= run.first - withheld_before && k <= run.last) aliasing.withhold_closure = true;
+    if (k >= run.first - ring.withheld_before && k <= run.last) aliasing.withhold_closure = true;
     if (k == run.first || k == run.last) aliasing.false_match = k - run.back;
-    aliasing.vetoed = vetoed.contains(k);
+    aliasing.vetoed = ring.vetoed.contains(k);
     run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(),
                                     world.Observe(k * RingWorld::kStep), aliasing));
   }
-  if (vetoed.empty()) {
+  if (ring.vetoed.empty()) {
     // Aliasing onto the robot's own recent frames is refused.
     Aliasing recent;
     recent.false_match = run.last + 15;
@@ -965,13 +970,13 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
   // rejects them), and run again.
   const AliasedRingRun plain = RunAliasedRing();
   std::set<int> vetoed{plain.first, plain.last};
-  const AliasedRingRun once = RunAliasedRing(vetoed);
+  const AliasedRingRun once = RunAliasedRing({.vetoed = vetoed});
   for (int k = once.last + 1; k < static_cast<int>(once.steps.size()); ++k) {
     const CatGraphStep& s = once.steps[static_cast<std::size_t>(k)];
     if (s.closure && RingDistance(k, s.matched_node) > 1.0) vetoed.insert(k);
   }
   REQUIRE(vetoed.size() > 2);
-  const AliasedRingRun run = RunAliasedRing(vetoed);
+  const AliasedRingRun run = RunAliasedRing({.vetoed = vetoed});
   int reference = -1, after = -1;
   for (std::size_t k = 0; k < run.steps.size(); ++k) {
     const CatGraphStep& s = run.steps[k];
@@ -1001,8 +1006,8 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
 // end rejected it) holds nothing, and new place finds the true place.
 TEST_CASE("Held after a closure: a closure the back end rejected does not hold the cloud where it put it",
           "[frontend][catgraph][false-matches]") {
-  const AliasedRingRun plain = RunAliasedRing({}, 0, 0, true);
-  const AliasedRingRun vetoed = RunAliasedRing({plain.first, plain.last}, 0, 0, true);
+  const AliasedRingRun plain = RunAliasedRing({.held = true});
+  const AliasedRingRun vetoed = RunAliasedRing({.vetoed = {plain.first, plain.last}, .held = true});
   REQUIRE(plain.steps.size() == vetoed.steps.size());
   for (int k = 0; k < plain.first; ++k) {  // the same run up to the pair
     CAPTURE(k);
@@ -1038,7 +1043,7 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
           "false pair",
           "[frontend][catgraph][catgraph-plus][false-matches]") {
   constexpr int kWithheld = 15;
-  const AliasedRingRun plain = RunAliasedRing({}, kWithheld);
+  const AliasedRingRun plain = RunAliasedRing({.withheld_before = kWithheld});
   // The closures the chain fails against: the pair, and those the visual
   // filter makes while it is still lost after it (3 m off); then the first
   // true one.
@@ -1066,8 +1071,8 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
   CHECK(met.reference_node == reference);
   CHECK(met.discarded.size() >= kWithheld - 1);
 
-  const AliasedRingRun vetoed = RunAliasedRing(failing, kWithheld);
-  const AliasedRingRun carried = RunAliasedRing({}, kWithheld, failures);
+  const AliasedRingRun vetoed = RunAliasedRing({.vetoed = failing, .withheld_before = kWithheld});
+  const AliasedRingRun carried = RunAliasedRing({.withheld_before = kWithheld, .total_path_retries = failures});
   REQUIRE(carried.steps.size() == vetoed.steps.size());
   for (std::size_t k = 0; k < carried.steps.size(); ++k) {
     CAPTURE(k);
@@ -1088,7 +1093,8 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
   // One retry fewer: the last false closure discards the chain, as it
   // stood there.
   const int last_failing = *failing.rbegin();
-  const AliasedRingRun one_short = RunAliasedRing({}, kWithheld, failures - 1);
+  const AliasedRingRun one_short =
+      RunAliasedRing({.withheld_before = kWithheld, .total_path_retries = failures - 1});
   const CatGraphStep& cut = one_short.steps[static_cast<std::size_t>(last_failing)];
   CHECK(cut.reference_node == reference);
   std::set<int> discarded, expected;
