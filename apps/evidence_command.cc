@@ -76,7 +76,7 @@ void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
     (d.frames[i].traversal == traversals.front() ? map_frames : query_frames).push_back(static_cast<int>(i));
   }
   const std::vector<FrameEvidence> evidence =
-      MeasureEvidence(in.model, in.words, truth, changed, map_frames, query_frames, o.evidence);
+      MeasureEvidence(*in.model, in.observations, truth, changed, map_frames, query_frames, o.evidence);
 
   std::ostringstream csv, md;
   csv << "frame,words,changed,self,true_place,near,far\n";
@@ -86,7 +86,7 @@ void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
   }
   std::vector<FrameEvidence> unchanged, in_changed;
   for (const FrameEvidence& e : evidence) (e.changed ? in_changed : unchanged).push_back(e);
-  md << "Evidence over FAB-MAP's mean field (nats) of the query frames (traversals after the first) against the "
+  md << "Evidence over new place (" << in.model->Name() << " model's nats) of the query frames (traversals after the first) against the "
         "map frames (the first): true place within "
      << Number(o.evidence.true_radius_m, "%.1f") << " m, near places " << Number(o.evidence.near_min_m, "%.1f")
      << "-" << Number(o.evidence.near_max_m, "%.1f") << " m away, far beyond.\n\n"
@@ -120,7 +120,7 @@ void AddEvidenceCommand(CLI::App& app, std::ostream& out) {
   auto o = std::make_shared<EvidenceCommandOptions>();
   CLI::App* cmd = app.add_subcommand(
       "evidence",
-      "How well FAB-MAP tells the true place from its look-alikes, frame by frame against ground truth: each "
+      "How well the observation model tells the true place from its look-alikes, frame by frame against ground truth: each "
       "query frame's self-evidence and the evidence of its true, near and far places (evidence.csv), and how "
       "often each scores over a grid of new-place offsets (summary.md). The measurement behind "
       "--new-place-offset and --new-place-relative-offset: docs/frontend.md.");

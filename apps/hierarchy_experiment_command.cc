@@ -134,8 +134,8 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
 
   o.front.quiet = true;  // no progress bars: dozens of filter runs
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
-  const std::vector<WordSet>& words = inputs.words;
-  const FabMapModel& model = inputs.model;
+  const std::vector<Observation>& words = inputs.observations;
+  const ObservationModel& model = *inputs.model;
   LocalizationOptions localization = o.front.localization;
   std::vector<Row> rows;
   for (const std::uint64_t seed : o.seeds) {

@@ -47,7 +47,6 @@ Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std:
 }
 
 FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
-  const Vocabulary vocabulary = VocabularyFor(d, o, out);
   auto features = std::make_shared<ProgressBar>("frames: features");
   auto filter = std::make_shared<ProgressBar>("frames: filter");
   if (!o.quiet) {
@@ -56,12 +55,40 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
     };
   }
   o.localization.threads = o.threads;
-  return {ExtractWords(d, vocabulary, o.localization), FabMapModel(vocabulary.tree(), FabMapOptions{})};
+  FrontEndInputs in;
+  if (o.observation == ObservationKind::kHolistic) {
+    HolisticFrontEnd holistic = PrepareHolistic(d, HolisticOptions{}, o.localization);
+    const HolisticCalibration& c = holistic.model->calibration();
+    out << "holistic observation model: " << holistic.model->options().width_px << " px templates, calibrated on "
+        << c.frames << " frames of the first traversal: M = " << Number(c.identical_score, "%.2f") << "\n";
+    in.observations = std::move(holistic.observations);
+    in.model = std::move(holistic.model);
+    return in;
+  }
+  const Vocabulary vocabulary = VocabularyFor(d, o, out);
+  in.observations = ExtractObservations(d, &vocabulary, nullptr, o.localization);
+  in.model = std::make_unique<FabMapModel>(vocabulary.tree(), FabMapOptions{});
+  return in;
 }
 
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
   const FrontEndInputs in = PrepareFrontEnd(d, o, out);
-  return Localize(d, in.words, in.model, o.localization);
+  return Localize(d, in.observations, *in.model, o.localization);
+}
+
+nlohmann::ordered_json ObservationJson(const ObservationSummary& o) {
+  nlohmann::ordered_json j{{"model", o.model}, {"new_place_log_offset", o.new_place_log_offset}};
+  if (o.holistic) {
+    j["template_width_px"] = o.holistic->width_px;
+    j["max_shift_fraction"] = o.holistic->max_shift_fraction;
+    j["reference_places"] = o.holistic->reference_places;
+  }
+  if (o.calibration) {
+    j["calibration"] = {{"identical_score", o.calibration->identical_score},
+                        {"frames", o.calibration->frames},
+                        {"offset_m", o.calibration->offset_m}};
+  }
+  return j;
 }
 
 std::size_t TotalPathDiscards(const LocalizationResult& r) {
@@ -185,6 +212,8 @@ void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const
   }
   WriteFileAtomically(dir / "discarded_inferences.json", [&](std::ostream& f) { f << discarded.dump(1) << '\n'; });
   WriteFileAtomically(dir / "closures.json", [&](std::ostream& f) { f << closures.dump(1) << '\n'; });
+  WriteFileAtomically(dir / "observation.json",
+                      [&](std::ostream& f) { f << ObservationJson(r.observation).dump(1) << '\n'; });
   WriteG2oFile(AnyPoseGraph(r.graph), dir / "graph.g2o");
   const plot::Figure figure = LocalizationFigure(d, r, closure_threshold);
   plot::SaveFigure(figure, dir / "localization.png");
@@ -268,6 +297,16 @@ void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o) {
 }
 
 void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
+  cmd.add_option_function<std::string>(
+         "--observation",
+         [&o](const std::string& name) {
+           const std::optional<ObservationKind> kind = ObservationKindFromString(name);
+           if (!kind) throw CLI::ValidationError("--observation", "expected fabmap or holistic, not '" + name + "'");
+           o.observation = *kind;
+         },
+         "Observation model: holistic (whole-image templates, calibrated on the first traversal) or fabmap "
+         "(bag of words on a vocabulary). docs/frontend.md \"Observation models\"")
+      ->default_str(std::string(ToString(o.observation)));
   cmd.add_option("--vocabulary", o.vocabulary,
                  "Vocabulary file (catgraph vocabulary train); default: train one on the first traversal");
   cmd.add_option("--words", o.words, "Words of the default vocabulary")->capture_default_str();
@@ -332,6 +371,15 @@ CLI::Validator NonNegative() {
       "NONNEGATIVE");
 }
 
+// A finite number.
+CLI::Validator Finite() {
+  return CLI::Validator(
+      [](const std::string& text) -> std::string {
+        return std::isfinite(ParseNumber(text)) ? std::string() : "Value " + text + " is not a finite number";
+      },
+      "FINITE");
+}
+
 }  // namespace
 
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
@@ -351,9 +399,11 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   cmd.add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
   cmd.add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
       ->capture_default_str();
-  cmd.add_option("--new-place-offset", f.new_place_log_offset,
-                 "Added to log p(z | new place), nats (0: the spec's mean field as written)")
-      ->capture_default_str();
+  cmd.add_option_function<double>(
+         "--new-place-offset", [&f](double offset) { f.new_place_log_offset = offset; },
+         "Added to log p(z | new place), in the observation model's nats (0: the spec as written)")
+      ->check(Finite())
+      ->default_str("the model's: fabmap 45, holistic 0");
   cmd.add_option("--new-place-stay-fraction", f.new_place_stay_fraction,
                  "What staying on the map costs, once on it, as a fraction of the offset (constant and relative "
                  "parts), which is what entering it costs. docs/frontend.md \"Staying on the map\"")

@@ -22,6 +22,7 @@ namespace catgraph {
 
 struct LocalizeCommandOptions {
   std::string dataset, vocabulary, output;
+  ObservationKind observation = ObservationKind::kFabMap;
   int words = 500, train_every = 0, threads = 0;
   LocalizationOptions localization;
   bool quiet = false;
@@ -42,15 +43,17 @@ void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o);
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out);
 
 // What the filter reads, made once for several runs over a dataset: the
-// words of every frame and the observation model of the vocabulary.
+// observation of every frame and the observation model.
 struct FrontEndInputs {
-  std::vector<WordSet> words;
-  FabMapModel model;
+  std::vector<Observation> observations;
+  std::unique_ptr<ObservationModel> model;
 };
 
-// The vocabulary (VocabularyFor) and the words of every frame, with
-// progress bars unless `o.quiet` (which also shows the filter's progress in
-// later runs with `o.localization`).
+// The observation model `o.observation` and every frame's observation:
+// FAB-MAP on the vocabulary (VocabularyFor), or the holistic model
+// calibrated on the first traversal; with progress bars unless `o.quiet`
+// (which also shows the filter's progress in later runs with
+// `o.localization`).
 FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
 
 // PrepareFrontEnd, then CAT-Graph (and CAT-Graph+) over the dataset.
@@ -68,12 +71,17 @@ plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color,
 // the error of every closure per frame.
 plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, double threshold);
 
+// The observation model as report.json and observation.json record it: its
+// name, new-place offset and, for the holistic model, its options and
+// calibration.
+nlohmann::ordered_json ObservationJson(const ObservationSummary& observation);
+
 // One closures.json entry: id, frame, matched_frame, kind, hypothesis,
 // relative_pose, error_m, and parents for inferred closures.
 nlohmann::ordered_json ClosureJson(const LoopClosure& closure);
 
-// hypotheses.csv, closures.json, discarded_inferences.json, graph.g2o and
-// localization.png/svg in `dir` (created), each written atomically.
+// hypotheses.csv, closures.json, discarded_inferences.json, observation.json,
+// graph.g2o and localization.png/svg in `dir` (created), each written atomically.
 void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const LocalizationResult& r,
                        double closure_threshold);
 

@@ -41,11 +41,10 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
   if (!(o.false_threshold_m > 0.0)) throw std::invalid_argument("--false-threshold: expected > 0");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "the sweep needs ground truth (groundtruth.csv)");
-  const Vocabulary vocabulary = VocabularyFor(d, o.base, out);
+  const FrontEndInputs inputs = PrepareFrontEnd(d, o.base, out);
   LocalizationOptions options = o.base.localization;
-  options.threads = o.base.threads;
-  const std::vector<WordSet> words = ExtractWords(d, vocabulary, options);
-  const FabMapModel model(vocabulary.tree(), FabMapOptions{});
+  const std::vector<Observation>& words = inputs.observations;
+  const ObservationModel& model = *inputs.model;
   PoseGraphOptimizerOptions optimizer;
   optimizer.method = RobustMethod::kSwitchable;
   const HierarchyOptions hierarchy = HierarchyOptionsFor("cascade", optimizer);

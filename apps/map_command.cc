@@ -138,13 +138,13 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   if (o.injection.count > 0) out << ", " << o.injection.count << " false visual matches injected";
   out << "\n";
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
-  LocalizationResult first = Localize(d, inputs.words, inputs.model, o.front.localization);
+  LocalizationResult first = Localize(d, inputs.observations, *inputs.model, o.front.localization);
   PrintLocalizationSummary(d, first, o.front.localization.filter.odometric_inference, out);
 
   out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on "
       << first.graph.vertices.size() << " poses and " << first.closures.size() << " closures\n";
   const Trajectory2 truth = TruthAtFrames(d);
-  const FedBackMap fed = MapWithFeedback(d, inputs.words, inputs.model, std::move(first), optimizer,
+  const FedBackMap fed = MapWithFeedback(d, inputs.observations, *inputs.model, std::move(first), optimizer,
                                          hierarchy_options, truth, o.feedback_reruns);
   const LocalizationResult& r = fed.front;
   const MapOutcome& m = fed.outcome;
@@ -228,6 +228,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
                                 {"frames", d.frames.size()},
                                 {"method", o.method},
                                 {"hierarchy", o.hierarchy},
+                                {"observation", ObservationJson(r.observation)},
                                 {"odometric_inference", o.front.localization.filter.odometric_inference},
                                 {"solves", solved.solves},
                                 {"time_s", solved.time_s},

@@ -70,7 +70,7 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
   return m;
 }
 
-FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
+FedBackMap MapWithFeedback(const Dataset& d, const std::vector<Observation>& observations, const ObservationModel& model,
                            LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
                            const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns) {
   FedBackMap out;
@@ -86,7 +86,7 @@ FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, 
       vetoed_more = localization.vetoed_frames.insert(c.frame).second || vetoed_more;
     }
     if (!vetoed_more) break;
-    front = Localize(d, words, model, localization);
+    front = Localize(d, observations, model, localization);
     ++out.reruns;
     out.outcome = SolveMap(front, optimizer, hierarchy, truth);
   }

@@ -82,7 +82,7 @@ struct FedBackMap {
   MapOutcome first;          // the first solve, before any re-run
   int reruns = 0;
 };
-FedBackMap MapWithFeedback(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
+FedBackMap MapWithFeedback(const Dataset& d, const std::vector<Observation>& observations, const ObservationModel& model,
                            LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
                            const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns);
 

@@ -148,7 +148,7 @@ void BM_FilterStep(benchmark::State& state) {
   state.counters["nodes"] = static_cast<double>(filter->graph().nodes().size());
   double bytes = 0.0;
   for (const GraphNode& n : filter->graph().nodes()) {
-    bytes += sizeof(GraphNode) + n.words.capacity() * sizeof(int) + n.edges.capacity() * sizeof(int);
+    bytes += sizeof(GraphNode) + n.observation.words.capacity() * sizeof(int) + n.edges.capacity() * sizeof(int);
   }
   bytes += static_cast<double>(filter->graph().edges().capacity() * sizeof(GraphEdge));
   state.counters["bytes_per_node"] = bytes / static_cast<double>(filter->graph().nodes().size());

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -79,7 +80,7 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
   if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
-  if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
+  if (o.new_place_log_offset && !std::isfinite(*o.new_place_log_offset)) fail("new_place_log_offset must be finite");
   if (!(o.new_place_stay_fraction >= 0.0 && o.new_place_stay_fraction <= 1.0)) {
     fail("new_place_stay_fraction must be in [0, 1]");
   }
@@ -104,7 +105,7 @@ void Validate(const CatGraphOptions& o) {
   if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
 }
 
-CatGraphFilter::CatGraphFilter(const FabMapModel& model, CatGraphOptions options)
+CatGraphFilter::CatGraphFilter(const ObservationModel& model, CatGraphOptions options)
     : model_(model),
       options_(options),
       rng_(options.seed),
@@ -204,12 +205,15 @@ void CatGraphFilter::MotionAndProjection(std::vector<Particle>& particles, const
   auto anchor = [&](std::size_t i) { return graph_.edge(particles[i].edge).from; };
   std::stable_sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return anchor(a) < anchor(b); });
   std::normal_distribution<double> normal(0.0, 1.0);
+  // The local graph must hold wherever a particle can go this step: at least
+  // the step plus four σ (frames far apart: real image sets).
+  const double radius = std::max(options_.motion_radius_m, u.translation().norm() + 4.0 * sigma.head<2>().maxCoeff());
   int built = -1;
   for (const std::size_t i : order_) {
     Particle& p = particles[i];
     const GraphEdge& e = graph_.edge(p.edge);
     if (e.from != built) {
-      builder_.Build(graph_, e.from, options_.motion_radius_m + e.length_m, eligible_, local_);
+      builder_.Build(graph_, e.from, radius + e.length_m, eligible_, local_);
       built = e.from;
     }
     const std::optional<Pose2> start = local_.PointPose(p.edge, p.alpha);
@@ -339,7 +343,21 @@ LocationHypothesis CatGraphFilter::BestHypothesis(const std::vector<Particle>& p
   return best;
 }
 
-CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, const WordSet& words,
+const std::vector<const Observation*>& CatGraphFilter::PlacesForScoring() {
+  places_.clear();
+  const int wanted = model_.PlacesWanted();
+  if (wanted <= 0) return places_;
+  eligible_scratch_.clear();
+  for (int n = 0; n < eligible_below_; ++n) {
+    if (Eligible(n)) eligible_scratch_.push_back(n);
+  }
+  for (const std::size_t k : EvenlySpread(eligible_scratch_.size(), wanted)) {
+    places_.push_back(&graph_.node(eligible_scratch_[k]).observation);
+  }
+  return places_;
+}
+
+CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, const Observation& z,
                                   const Aliasing& aliasing) {
   const bool first = graph_.nodes().empty();
   // After a gap in the frames (traversals recorded apart) the motion since
@@ -372,7 +390,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     step.lost = std::move(lost);
     step.lost_reason = DiscardReason::kSequenceBreak;
   }
-  const FrameLikelihood likelihood = model_.ForFrame(words);
+  const std::unique_ptr<FrameScore> likelihood = model_.ScoreFrame(z, PlacesForScoring());
 
   if (particles_.empty()) {
     SeedUniformly(static_cast<std::size_t>(options_.num_particles), particles_);
@@ -387,7 +405,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     const auto i = static_cast<std::size_t>(n);
     if (node_ll_step_[i] != steps_) {
       node_ll_step_[i] = steps_;
-      node_ll_[i] = likelihood.LogLikelihood(graph_.node(n).words);
+      node_ll_[i] = likelihood->LogLikelihood(graph_.node(n).observation);
     }
     return node_ll_[i];
   };
@@ -436,8 +454,9 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const bool needs_self_evidence = options_.new_place_relative_offset > 0.0 ||
                                    options_.new_place_stay_relative_offset > 0.0 ||
                                    options_.closure_min_evidence > 0.0;
-  const double self_evidence = needs_self_evidence ? likelihood.SelfEvidence(words) : 0.0;
-  const double offset = options_.new_place_log_offset + options_.new_place_relative_offset * self_evidence;
+  const double self_evidence = needs_self_evidence ? likelihood->SelfEvidence() : 0.0;
+  const double offset = options_.new_place_log_offset.value_or(model_.NewPlaceLogOffset()) +
+                        options_.new_place_relative_offset * self_evidence;
   // The mass that holds the robot on the map: all of it, or under
   // hold_after_closure none until the cloud has closed since it came on.
   const double held = options_.hold_after_closure && !closed_since_entry_ ? 0.0 : mapped_mass_;
@@ -462,20 +481,20 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     // Direction +1 faces the way the nodes' camera faced (a node's frame is
     // the robot's pose). A forward camera facing the other way sees what the
     // nodes never saw: such a particle is weighed as an unremarkable place,
-    // by FAB-MAP's mean field (without the new-place offset)
+    // by the model's unseen place (FAB-MAP's mean field; without the new-place offset)
     // [D, docs/frontend.md].
     const bool reversed = options_.forward_camera && p.direction < 0;
     const double log_observation =
-        reversed ? likelihood.LogNewPlaceLikelihood()
+        reversed ? likelihood->LogUnseenPlaceLikelihood()
                  : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
                              p.alpha > 0.0 ? std::log(p.alpha) + node_ll(e.to) : kNegInf);
     log_mixture = LogSumExp(log_mixture, p.log_weight + log_observation);
     p.log_weight += log_observation + log_keep;
   }
   step.log_evidence = log_mixture == kNegInf ? std::numeric_limits<double>::quiet_NaN()
-                                             : log_mixture - likelihood.LogNewPlaceLikelihood();
+                                             : log_mixture - likelihood->LogNewPlaceLikelihood();
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
-  double log_new = std::log(prior_new) + likelihood.LogNewPlaceLikelihood() + offset;
+  double log_new = std::log(prior_new) + likelihood->LogNewPlaceLikelihood() + offset;
   if (!restart) {
     // Welford's running mean and spread of the odometry.
     ++u_count_;
@@ -514,7 +533,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     mapped_mass_ = 1.0;
   }
   const int previous = first ? -1 : static_cast<int>(graph_.nodes().size()) - 1;
-  step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, words);
+  step.node = graph_.AddNode(frame, time_s, path_length_m_, odometry_pose_, z);
   if (previous >= 0) graph_.AddEdge(previous, step.node, u, EdgeType::kOdometry);
   // A forward camera facing against the matched nodes saw none of what they
   // saw: its particles carry no visual evidence (the mean field above), only

@@ -40,7 +40,7 @@
 #include <Eigen/Core>
 
 #include "backend/graph/pose2.h"
-#include "frontend/fabmap.h"
+#include "frontend/observation_model.h"
 #include "frontend/trajectory_graph.h"
 
 namespace catgraph {
@@ -102,11 +102,11 @@ struct CatGraphOptions {
   // for 1e-20, against which the frames score what the stay offset below
   // leaves them (docs/frontend.md "Leaving the map", "Staying on the map").
   double leave_probability = 1e-20;
-  // Added to log p(z | new place) [D, docs/frontend.md]: FAB-MAP's mean field
-  // scores a corridor frame far below the places a few metres along the same
-  // corridor, which share its far view. Nats; chosen for 500-word SIFT
-  // vocabularies (docs/frontend.md); 0 is the spec as written.
-  double new_place_log_offset = 45.0;
+  // Added to log p(z | new place), in the observation model's nats [D,
+  // docs/frontend.md]. Unset: the model's own (ObservationModel::
+  // NewPlaceLogOffset: FAB-MAP's 45, none for the calibrated holistic model);
+  // 0 is the spec as written. Finite when set.
+  std::optional<double> new_place_log_offset;
   // Added to the offset: this fraction of the frame's self-evidence, how much
   // better than the mean field a node that saw exactly the frame's words
   // would explain it [D, docs/frontend.md]. A frame with few words cannot
@@ -156,11 +156,11 @@ struct CatGraphOptions {
   // A gap between frames longer than this restarts the particles (the
   // traversals of a dataset recorded apart); > 0.
   double sequence_break_s = 5.0;
-  double motion_radius_m = 0.5;            // local-graph radius for the motion update (> one
-                                           // frame's step + 3σ); > 0
+  double motion_radius_m = 0.5;            // local-graph radius for the motion update, at least
+                                           // the frame's step + 4σ; > 0
   int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1
   // The camera sees one way (the paper's forward patch), so particles facing
-  // against the nodes' headings get FAB-MAP's mean-field likelihood, not the
+  // against the nodes' headings get the model's unseen-place likelihood (FAB-MAP's mean field), not the
   // nodes', and a hypothesis facing against them is no visual closure: the
   // camera cannot have recognised what it did not see [D, docs/frontend.md].
   // False for a panoramic camera (spec Eq 2 as written).
@@ -310,14 +310,18 @@ struct CatGraphStep {
 class CatGraphFilter {
  public:
   // `model` must outlive the filter.
-  CatGraphFilter(const FabMapModel& model, CatGraphOptions options);
+  CatGraphFilter(const ObservationModel& model, CatGraphOptions options);
   CatGraphFilter(const CatGraphFilter&) = delete;  // holds a callback on itself
   CatGraphFilter& operator=(const CatGraphFilter&) = delete;
 
   // One frame: `u` is the odometry since the previous frame (ignored for the
-  // first), `words` the frame's observation. Throws std::invalid_argument
-  // for an aliasing onto a node that is not eligible by age.
-  CatGraphStep Step(int frame, double time_s, const Pose2& u, const WordSet& words, const Aliasing& aliasing = {});
+  // first), `z` the frame's observation. Throws std::invalid_argument for an
+  // aliasing onto a node that is not eligible by age.
+  CatGraphStep Step(int frame, double time_s, const Pose2& u, const Observation& z, const Aliasing& aliasing = {});
+  // A frame observed by its words alone (FAB-MAP).
+  CatGraphStep Step(int frame, double time_s, const Pose2& u, const WordSet& words, const Aliasing& aliasing = {}) {
+    return Step(frame, time_s, u, Observation{words, {}}, aliasing);
+  }
 
   const TrajectoryGraph& graph() const { return graph_; }
   const std::vector<Particle>& particles() const { return particles_; }
@@ -349,7 +353,11 @@ class CatGraphFilter {
   // O from V at a visual closure matched at `match` (§3.5; CatGraphOptions).
   void ReinitialiseOdometric(const LocationHypothesis& match);
 
-  const FabMapModel& model_;
+  // The eligible nodes' observations ScoreFrame is given, evenly spread
+  // (up to the model's PlacesWanted()).
+  const std::vector<const Observation*>& PlacesForScoring();
+
+  const ObservationModel& model_;
   CatGraphOptions options_;
   TrajectoryGraph graph_;
   std::vector<Particle> particles_;
@@ -363,6 +371,8 @@ class CatGraphFilter {
   std::function<bool(int)> eligible_;      // Eligible() for the builder
   std::vector<int> seed_edges_;            // scratch: edges to reseed on ...
   std::vector<double> seed_cumulative_;    // ... and their cumulative length
+  std::vector<int> eligible_scratch_;      // scratch: eligible nodes ...
+  std::vector<const Observation*> places_; // ... and the observations sampled from them
   LocalGraphBuilder builder_;
   LocalGraph local_;                       // scratch
   std::vector<std::size_t> order_;         // scratch: particle indices by edge

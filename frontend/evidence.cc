@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -20,7 +21,17 @@ void Validate(const EvidenceOptions& o) {
   }
 }
 
-std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::vector<WordSet>& words,
+std::vector<FrameEvidence> MeasureEvidence(const ObservationModel& model, const std::vector<WordSet>& words,
+                                           const std::vector<Pose2>& truth, const std::vector<bool>& changed,
+                                           const std::vector<int>& map_frames, const std::vector<int>& query_frames,
+                                           const EvidenceOptions& o) {
+  std::vector<Observation> observations;
+  observations.reserve(words.size());
+  for (const WordSet& w : words) observations.push_back({w, {}});
+  return MeasureEvidence(model, observations, truth, changed, map_frames, query_frames, o);
+}
+
+std::vector<FrameEvidence> MeasureEvidence(const ObservationModel& model, const std::vector<Observation>& words,
                                            const std::vector<Pose2>& truth, const std::vector<bool>& changed,
                                            const std::vector<int>& map_frames, const std::vector<int>& query_frames,
                                            const EvidenceOptions& o) {
@@ -35,24 +46,30 @@ std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::
     return static_cast<std::size_t>(frame);
   };
   for (const int m : map_frames) check(m);
+  // The places a model that standardises against the map is shown: the map
+  // frames, evenly spread.
+  std::vector<const Observation*> places;
+  for (const std::size_t i : EvenlySpread(map_frames.size(), model.PlacesWanted())) {
+    places.push_back(&words[static_cast<std::size_t>(map_frames[i])]);
+  }
   std::vector<FrameEvidence> result;
   result.reserve(query_frames.size());
   for (const int q : query_frames) {
     const std::size_t k = check(q);
-    const FrameLikelihood likelihood = model.ForFrame(words[k]);
-    const double mean_field = likelihood.LogNewPlaceLikelihood();
+    const std::unique_ptr<FrameScore> likelihood = model.ScoreFrame(words[k], places);
+    const double mean_field = likelihood->LogNewPlaceLikelihood();
     FrameEvidence e;
     e.frame = q;
-    e.words = words[k].size();
+    e.words = words[k].words.size();
     e.changed = !changed.empty() && changed[k];
-    e.self = likelihood.SelfEvidence(words[k]);
+    e.self = likelihood->SelfEvidence();
     for (const int m : map_frames) {
       const auto j = static_cast<std::size_t>(m);
       if (std::abs(WrapAngle(truth[j].theta() - truth[k].theta())) > o.max_heading_rad) continue;
       const double distance = (truth[j].translation() - truth[k].translation()).norm();
       const bool near = distance >= o.near_min_m && distance < o.near_max_m;
       if (distance >= o.true_radius_m && !near && distance < o.near_max_m) continue;  // between the bands
-      const double nats = likelihood.LogLikelihood(words[j]) - mean_field;
+      const double nats = likelihood->LogLikelihood(words[j]) - mean_field;
       MaxInto(distance < o.true_radius_m ? e.true_place : near ? e.near : e.far, nats);
     }
     result.push_back(e);

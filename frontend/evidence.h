@@ -1,9 +1,9 @@
-// How well FAB-MAP tells a revisited place from its neighbours, frame by
-// frame, against ground truth: the measurement behind the new-place offsets
+// How well an observation model tells a revisited place from its
+// neighbours, frame by frame, against ground truth: the measurement behind the new-place offsets
 // (docs/frontend.md "A relative new-place offset"), `catgraph evidence`.
 //
 // For a query frame z (a later traversal) and a map frame L (the first), the
-// evidence is log p(z | L) - log p(z | mean field) in nats, the quantity the
+// evidence is log p(z | L) - log p(z | new place) in the model's nats, the quantity the
 // new-place offset is compared with. Per query frame:
 //   self      the evidence of z against a node that saw exactly z's words:
 //             how much better than the mean field any place can explain it;
@@ -47,11 +47,18 @@ struct FrameEvidence {
   double far = std::numeric_limits<double>::quiet_NaN();
 };
 
-// `words` and `truth` per frame (same length); `map_frames` and
+// `observations` and `truth` per frame (same length); `map_frames` and
 // `query_frames` index them. `changed` (per frame, may be empty) is copied
-// into the result. Throws std::invalid_argument on mismatched sizes, an
-// index out of range or options out of range.
-std::vector<FrameEvidence> MeasureEvidence(const FabMapModel& model, const std::vector<WordSet>& words,
+// into the result. A model that standardises against the map
+// (ObservationModel::PlacesWanted) is shown the map frames, evenly spread.
+// Throws std::invalid_argument on mismatched sizes, an index out of range or
+// options out of range.
+std::vector<FrameEvidence> MeasureEvidence(const ObservationModel& model, const std::vector<Observation>& observations,
+                                           const std::vector<Pose2>& truth, const std::vector<bool>& changed,
+                                           const std::vector<int>& map_frames, const std::vector<int>& query_frames,
+                                           const EvidenceOptions& options = {});
+// The same for frames observed by their words alone.
+std::vector<FrameEvidence> MeasureEvidence(const ObservationModel& model, const std::vector<WordSet>& words,
                                            const std::vector<Pose2>& truth, const std::vector<bool>& changed,
                                            const std::vector<int>& map_frames, const std::vector<int>& query_frames,
                                            const EvidenceOptions& options = {});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -112,6 +113,33 @@ FabMapModel::FabMapModel(ChowLiuTree tree, FabMapOptions options, std::vector<Wo
     throw std::invalid_argument("p_observe_given_absent: expected [0, 1), found " +
                                 std::to_string(options_.p_observe_given_absent));
   }
+  if (!std::isfinite(options_.new_place_log_offset)) {
+    throw std::invalid_argument("new_place_log_offset: expected a finite number");
+  }
+}
+
+namespace {
+
+class FabMapFrameScore : public FrameScore {
+ public:
+  FabMapFrameScore(FrameLikelihood likelihood, double self_evidence)
+      : likelihood_(std::move(likelihood)), self_evidence_(self_evidence) {}
+  double LogLikelihood(const Observation& node) const override { return likelihood_.LogLikelihood(node.words); }
+  double LogNewPlaceLikelihood() const override { return likelihood_.LogNewPlaceLikelihood(); }
+  double SelfEvidence() const override { return self_evidence_; }
+
+ private:
+  FrameLikelihood likelihood_;
+  double self_evidence_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameScore> FabMapModel::ScoreFrame(const Observation& z,
+                                                    const std::vector<const Observation*>& /*places*/) const {
+  FrameLikelihood likelihood = ForFrame(z.words);
+  const double self = likelihood.SelfEvidence(z.words);
+  return std::make_unique<FabMapFrameScore>(std::move(likelihood), self);
 }
 
 double FabMapModel::PExists(int q, bool location_has_word) const {

@@ -29,12 +29,13 @@
 #define CATGRAPH_FRONTEND_FABMAP_H_
 
 #include <cstdint>
+#include <memory>
+#include <string_view>
 #include <vector>
 
-namespace catgraph {
+#include "frontend/observation_model.h"
 
-// Sorted, unique word ids present in one image.
-using WordSet = std::vector<int>;
+namespace catgraph {
 
 struct ChowLiuTree {
   // Per word: parent word (-1 for the root), p(z_q = 1), p(z_q = 1 | z_p = 1),
@@ -72,11 +73,17 @@ struct FabMapOptions {
   double p_observe_given_absent = 0.0;   // p(z=1 | e=0), Table I; [0, 1)
   bool naive_bayes = false;              // ignore the Chow-Liu tree
   NewPlaceModel new_place = NewPlaceModel::kMeanField;
+  // Added to log p(z | new place) by the filter (ObservationModel::
+  // NewPlaceLogOffset) [D, docs/frontend.md]: FAB-MAP's mean field scores a
+  // corridor frame far below the places a few metres along the same
+  // corridor, which share its far view. Nats; chosen for 500-word SIFT
+  // vocabularies on rendered images (docs/frontend.md); 0 is the spec.
+  double new_place_log_offset = 45.0;
 };
 
 class FrameLikelihood;
 
-class FabMapModel {
+class FabMapModel : public ObservationModel {
  public:
   // Throws std::invalid_argument on options out of range, an empty tree, or
   // a sampled new place without samples. `new_place_samples` (observations
@@ -93,6 +100,12 @@ class FabMapModel {
   // log p(z | L) evaluated directly, word by word (reference for tests and
   // single queries; ForFrame(z).LogLikelihood(L) gives the same value).
   double LogLikelihoodDirect(const WordSet& z, const WordSet& location) const;
+
+  // ObservationModel: the words of z against the nodes' words.
+  std::string_view Name() const override { return "fabmap"; }
+  std::unique_ptr<FrameScore> ScoreFrame(const Observation& z,
+                                         const std::vector<const Observation*>& places) const override;
+  double NewPlaceLogOffset() const override { return options_.new_place_log_offset; }
 
  private:
   friend class FrameLikelihood;

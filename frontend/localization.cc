@@ -24,14 +24,25 @@ constexpr NameTable<DiscardReason, 3> kDiscardReasonNames = {{
 
 std::vector<WordSet> ExtractWords(const Dataset& d, const Vocabulary& vocabulary,
                                   const LocalizationOptions& options) {
-  std::vector<WordSet> words(d.frames.size());
+  std::vector<Observation> observations = ExtractObservations(d, &vocabulary, nullptr, options);
+  std::vector<WordSet> words;
+  words.reserve(observations.size());
+  for (Observation& o : observations) words.push_back(std::move(o.words));
+  return words;
+}
+
+std::vector<Observation> ExtractObservations(const Dataset& d, const Vocabulary* vocabulary,
+                                             const HolisticModel* holistic, const LocalizationOptions& options) {
+  std::vector<Observation> observations(d.frames.size());
   std::atomic<std::size_t> next{0}, done{0};
   std::exception_ptr error;
   std::mutex mutex;
   auto work = [&](bool report) {
     for (std::size_t i = next++; i < d.frames.size(); i = next++) {
       try {
-        words[i] = vocabulary.Words(ReadImage(d.ImagePath(i)));
+        const cv::Mat image = ReadImage(d.ImagePath(i));
+        if (vocabulary != nullptr) observations[i].words = vocabulary->Words(image);
+        if (holistic != nullptr) observations[i].holistic = holistic->Template(image);
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
         if (!error) error = std::current_exception();
@@ -47,24 +58,48 @@ std::vector<WordSet> ExtractWords(const Dataset& d, const Vocabulary& vocabulary
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
   if (options.on_progress) options.on_progress("features", d.frames.size(), d.frames.size());
-  return words;
+  return observations;
+}
+
+HolisticFrontEnd PrepareHolistic(const Dataset& d, const HolisticOptions& holistic,
+                                 const LocalizationOptions& options) {
+  HolisticFrontEnd out;
+  const HolisticModel uncalibrated(holistic, {});
+  out.observations = ExtractObservations(d, nullptr, &uncalibrated, options);
+  // The first traversal in order of travel, with its odometry distance.
+  const int first = d.Traversals().front();
+  const std::vector<Pose2> odometry = PosesAtFrames(d, d.odometry);
+  std::vector<cv::Mat> templates;
+  std::vector<double> path_length_m;
+  for (std::size_t k = 0; k < d.frames.size(); ++k) {
+    if (d.frames[k].traversal != first) continue;
+    path_length_m.push_back(path_length_m.empty() ? 0.0
+                                                  : path_length_m.back() +
+                                                        (odometry[k].translation() - odometry[k - 1].translation()).norm());
+    templates.push_back(out.observations[k].holistic);
+  }
+  const HolisticCalibration calibration =
+      CalibrateHolistic(uncalibrated, templates, path_length_m, options.filter.hypothesis_radius_m,
+                        std::max(options.filter.exclusion_window_m, 2.0 * options.filter.hypothesis_radius_m));
+  out.model = std::make_unique<HolisticModel>(holistic, calibration);
+  return out;
 }
 
 LocalizationResult Localize(const Dataset& d, const Vocabulary& vocabulary,
                             const LocalizationOptions& options) {
   const FabMapModel model(vocabulary.tree(), FabMapOptions{});
-  return Localize(d, ExtractWords(d, vocabulary, options), model, options);
+  return Localize(d, ExtractObservations(d, &vocabulary, nullptr, options), model, options);
 }
 
-LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words, const FabMapModel& model,
-                            const LocalizationOptions& options) {
+LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& observations,
+                            const ObservationModel& model, const LocalizationOptions& options) {
   const PoseGraphUncertainty& uncertainty = options.graph_uncertainty;
   if (!(uncertainty.odometry_m_per_sqrt_m > 0.0 && uncertainty.odometry_rad_per_sqrt_m > 0.0 &&
         uncertainty.min_distance_m > 0.0 && (uncertainty.closure_sigma.array() > 0.0).all())) {
     throw std::invalid_argument("Localize: every PoseGraphUncertainty field must be > 0");
   }
-  if (words.size() != d.frames.size()) {
-    throw std::invalid_argument("Localize: " + std::to_string(words.size()) + " word sets for " +
+  if (observations.size() != d.frames.size()) {
+    throw std::invalid_argument("Localize: " + std::to_string(observations.size()) + " observations for " +
                                 std::to_string(d.frames.size()) + " frames");
   }
   // The aliasing of every frame; the filter's node of frame k is k.
@@ -99,8 +134,14 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   CatGraphFilter filter(model, options.filter);
   LocalizationResult result;
   result.options = options;
+  result.observation.model = model.Name();
+  result.observation.new_place_log_offset = options.filter.new_place_log_offset.value_or(model.NewPlaceLogOffset());
+  if (const auto* holistic = dynamic_cast<const HolisticModel*>(&model)) {
+    result.observation.holistic = holistic->options();
+    result.observation.calibration = holistic->calibration();
+  }
   std::vector<std::size_t> sizes;
-  for (const auto& w : words) sizes.push_back(w.size());
+  for (const auto& o : observations) sizes.push_back(o.words.size());
   std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(sizes.size() / 2), sizes.end());
   result.words_per_frame_median = sizes.empty() ? 0 : sizes[sizes.size() / 2];
 
@@ -145,7 +186,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<WordSet>& words,
   };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
     const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
-    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, words[k], aliasing[k]);
+    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, observations[k], aliasing[k]);
     FrameLocalization f;
     f.frame = static_cast<int>(k);
     f.traversal = d.frames[k].traversal;

@@ -8,7 +8,9 @@
 
 #include <functional>
 #include <limits>
+#include <optional>
 #include <set>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -16,6 +18,8 @@
 #include "backend/io/dataset.h"
 #include "frontend/cat_graph.h"
 #include "frontend/false_matches.h"
+#include "frontend/holistic.h"
+#include "frontend/observation_model.h"
 #include "frontend/vocabulary.h"
 
 namespace catgraph {
@@ -105,7 +109,16 @@ struct LocalizationOptions {
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;
 };
 
+// The observation model a run used and what it was calibrated to.
+struct ObservationSummary {
+  std::string model;                           // ObservationModel::Name()
+  double new_place_log_offset = 0.0;           // as the filter applied it
+  std::optional<HolisticOptions> holistic;     // the holistic model's options ...
+  std::optional<HolisticCalibration> calibration;  // ... and calibration
+};
+
 struct LocalizationResult {
+  ObservationSummary observation;
   std::vector<FrameLocalization> frames;
   std::vector<LoopClosure> closures;  // in the order they were made
   std::vector<DiscardedInference> discarded_inferences;
@@ -122,10 +135,26 @@ struct LocalizationResult {
 std::vector<WordSet> ExtractWords(const Dataset& dataset, const Vocabulary& vocabulary,
                                   const LocalizationOptions& options);
 
-// The filter over frames whose words are given (one set per frame), so that
-// several runs over the same data extract the features once.
-LocalizationResult Localize(const Dataset& dataset, const std::vector<WordSet>& words,
-                            const FabMapModel& model, const LocalizationOptions& options);
+// The observation of every frame, in frame order, on options.threads
+// threads: the words when `vocabulary` is given, the holistic template when
+// `holistic` is. Throws FileError for an image that cannot be read.
+std::vector<Observation> ExtractObservations(const Dataset& dataset, const Vocabulary* vocabulary,
+                                             const HolisticModel* holistic, const LocalizationOptions& options);
+
+// The holistic model calibrated on the dataset's first traversal
+// (CalibrateHolistic: neighbours d_h apart, places beyond the exclusion
+// window's distance), with the templates of every frame.
+struct HolisticFrontEnd {
+  std::unique_ptr<HolisticModel> model;
+  std::vector<Observation> observations;
+};
+HolisticFrontEnd PrepareHolistic(const Dataset& dataset, const HolisticOptions& holistic,
+                                 const LocalizationOptions& options);
+
+// The filter over frames whose observations are given (one per frame), so
+// that several runs over the same data extract the features once.
+LocalizationResult Localize(const Dataset& dataset, const std::vector<Observation>& observations,
+                            const ObservationModel& model, const LocalizationOptions& options);
 
 // ExtractWords, then the filter with the vocabulary's Chow-Liu tree.
 LocalizationResult Localize(const Dataset& dataset, const Vocabulary& vocabulary,

@@ -9,13 +9,13 @@
 namespace catgraph {
 
 int TrajectoryGraph::AddNode(int frame, double time_s, double path_length_m, const Pose2& odometry_pose,
-                             WordSet words) {
+                             Observation observation) {
   GraphNode node;
   node.frame = frame;
   node.time_s = time_s;
   node.path_length_m = path_length_m;
   node.odometry_pose = odometry_pose;
-  node.words = std::move(words);
+  node.observation = std::move(observation);
   nodes_.push_back(std::move(node));
   return static_cast<int>(nodes_.size()) - 1;
 }

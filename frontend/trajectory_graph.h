@@ -1,5 +1,5 @@
 // CAT-Graph's continuous trajectory graph (docs/catgraph-spec.md §1.2–1.4):
-// one node per image with its bag of words, directed edges carrying the
+// one node per image with its observation, directed edges carrying the
 // relative pose u_mn (N_n in the frame of N_m), and local graphs — the
 // neighbourhood of a point on an edge laid out in metric coordinates by a
 // Dijkstra search along the edges, first (shortest-path) arrival winning, so
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "backend/graph/pose2.h"
-#include "frontend/fabmap.h"
+#include "frontend/observation_model.h"
 
 namespace catgraph {
 
@@ -30,7 +30,7 @@ struct GraphNode {
   double time_s = 0.0;
   double path_length_m = 0.0;  // odometry distance from the first node
   Pose2 odometry_pose;         // dead reckoning from the first node
-  WordSet words;
+  Observation observation;
   std::vector<int> edges;      // incident edges, both directions
 };
 
@@ -43,7 +43,7 @@ struct GraphEdge {
 
 class TrajectoryGraph {
  public:
-  int AddNode(int frame, double time_s, double path_length_m, const Pose2& odometry_pose, WordSet words);
+  int AddNode(int frame, double time_s, double path_length_m, const Pose2& odometry_pose, Observation observation);
   // Throws std::invalid_argument on unknown nodes or a self-edge.
   int AddEdge(int from, int to, const Pose2& u, EdgeType type);
 

@@ -290,7 +290,7 @@ TEST_CASE("localize refuses a motion noise that is not three positive numbers, b
 }
 
 TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observation window, a closure evidence "
-          "fraction or a retry count out of range, by name",
+          "fraction, a retry count, an observation model or a new-place offset out of range, by name",
           "[apps][localize][bad-input]") {
   const std::vector<std::pair<std::string, std::vector<std::string>>> bad = {
       {"--new-place-stay-fraction", {"1.5", "-0.1", "nan", "half"}},
@@ -298,6 +298,8 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
       {"--observation-window", {"-0.1", "nan", "inf", "wide"}},
       {"--closure-min-evidence", {"1.5", "-0.1", "nan", "a fifth"}},
       {"--total-path-retries", {"-1", "101", "1.5", "two"}},
+      {"--observation", {"seqslam", "FABMAP", ""}},
+      {"--new-place-offset", {"nan", "inf", "many"}},
   };
   for (const auto& [option, values] : bad) {
     for (const std::string& value : values) {
@@ -311,7 +313,7 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
   const Result ok = Run({"localize", "no-such-dataset", "-o", "unused", "--new-place-stay-fraction", "1",
                          "--new-place-stay-relative-offset", "0.99", "--observation-window", "0.4",
                          "--closure-min-evidence", "1", "--no-heading-likelihood", "--hold-after-closure",
-                         "--total-path-retries", "100"});
+                         "--total-path-retries", "100", "--observation", "holistic", "--new-place-offset", "-3"});
   CHECK(ok.status != 0);
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
@@ -455,9 +457,9 @@ TEST_CASE("office-static: traversal 2 closes visually all but in full, none wron
   const auto root = testing::TempDir("office_static");
   LocalizeCommandOptions o;
   const auto [d, in] = SimulateAndPrepare("office-static", root, o);
-  const LocalizationResult plus = Localize(d, in.words, in.model, o.localization);
+  const LocalizationResult plus = Localize(d, in.observations, *in.model, o.localization);
   o.localization.filter.odometric_inference = false;
-  const LocalizationResult alone = Localize(d, in.words, in.model, o.localization);
+  const LocalizationResult alone = Localize(d, in.observations, *in.model, o.localization);
 
   int second = 0, closed = 0;
   for (const LoopClosure& c : plus.closures) {
@@ -499,7 +501,7 @@ TEST_CASE("office-split: no wrong visual closure at the detour's corners and no 
   const auto root = testing::TempDir("office_split");
   LocalizeCommandOptions o;
   const auto [d, in] = SimulateAndPrepare("office-split", root, o);
-  const LocalizationResult result = Localize(d, in.words, in.model, o.localization);
+  const LocalizationResult result = Localize(d, in.observations, *in.model, o.localization);
   int visual = 0, inferred = 0;
   for (const LoopClosure& c : result.closures) {
     CAPTURE(c.frame, c.matched_frame, c.error_m);

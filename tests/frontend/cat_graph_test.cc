@@ -14,6 +14,7 @@
 #include "tests/catch.h"
 
 #include "frontend/cat_graph.h"
+#include "frontend/fabmap.h"
 #include "frontend/trajectory_graph.h"
 
 namespace catgraph {
