@@ -4,7 +4,7 @@
 //   motion    every particle moves by the frame's odometry plus noise
 //             w ~ N(0, Q) in control space, in the local graph of its edge,
 //             and is projected back onto the nearest edge (§2.1–2.2);
-//   weights   × exp(-½ (x - y)ᵀ Q⁻¹ (x - y)) (Eq 1) × the FAB-MAP likelihood
+//   weights   × exp(-½ (x - y)ᵀ Q⁻¹ (x - y)) (Eq 1) × the observation likelihood
 //             interpolated between the edge's two nodes (Eq 2), against a
 //             new-place hypothesis of prior mass p_new (Eq 6);
 //   location  the best hypothesis is the particle whose d_h-neighbourhood
