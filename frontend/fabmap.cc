@@ -122,24 +122,23 @@ namespace {
 
 class FabMapFrameScore : public FrameScore {
  public:
-  FabMapFrameScore(FrameLikelihood likelihood, double self_evidence)
-      : likelihood_(std::move(likelihood)), self_evidence_(self_evidence) {}
+  // `words` (the frame's) must outlive the score.
+  FabMapFrameScore(FrameLikelihood likelihood, const WordSet& words)
+      : likelihood_(std::move(likelihood)), words_(words) {}
   double LogLikelihood(const Observation& node) const override { return likelihood_.LogLikelihood(node.words); }
   double LogNewPlaceLikelihood() const override { return likelihood_.LogNewPlaceLikelihood(); }
-  double SelfEvidence() const override { return self_evidence_; }
+  double SelfEvidence() const override { return likelihood_.SelfEvidence(words_); }
 
  private:
   FrameLikelihood likelihood_;
-  double self_evidence_;
+  const WordSet& words_;
 };
 
 }  // namespace
 
 std::unique_ptr<FrameScore> FabMapModel::ScoreFrame(const Observation& z,
                                                     const std::vector<const Observation*>& /*places*/) const {
-  FrameLikelihood likelihood = ForFrame(z.words);
-  const double self = likelihood.SelfEvidence(z.words);
-  return std::make_unique<FabMapFrameScore>(std::move(likelihood), self);
+  return std::make_unique<FabMapFrameScore>(ForFrame(z.words), z.words);
 }
 
 double FabMapModel::PExists(int q, bool location_has_word) const {

@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include <opencv2/imgproc.hpp>
+
+#include "frontend/sad_matcher.h"
 
 namespace catgraph {
 namespace {
@@ -117,26 +118,7 @@ cv::Mat HolisticModel::Template(const cv::Mat& image) const {
 }
 
 double HolisticModel::Difference(const cv::Mat& a, const cv::Mat& b) const {
-  if (a.size() != b.size() || a.type() != CV_32F || b.type() != CV_32F) {
-    throw std::invalid_argument("HolisticModel::Difference: templates of different size or type (images of "
-                                "different aspect ratios in one dataset?)");
-  }
-  const int w = a.cols;
-  const int max_shift = static_cast<int>(options_.max_shift_fraction * w);
-  double best = std::numeric_limits<double>::infinity();
-  for (int s = -max_shift; s <= max_shift; ++s) {
-    // Column c of a against column c + s of b where both exist; the mean over
-    // the overlap, so that large shifts are not favoured.
-    const int c0 = std::max(0, -s), c1 = std::min(w, w - s);
-    float sum = 0.0f;
-    for (int y = 0; y < a.rows; ++y) {
-      const float* p = a.ptr<float>(y);
-      const float* q = b.ptr<float>(y);
-      for (int c = c0; c < c1; ++c) sum += std::abs(p[c] - q[c + s]);
-    }
-    best = std::min(best, static_cast<double>(sum) / (static_cast<double>(c1 - c0) * a.rows));
-  }
-  return best;
+  return CompareTemplates(a, b, static_cast<int>(options_.max_shift_fraction * a.cols)).difference;
 }
 
 std::unique_ptr<FrameScore> HolisticModel::ScoreFrame(const Observation& z,

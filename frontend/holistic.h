@@ -75,7 +75,8 @@ class HolisticModel : public ObservationModel {
   // width_px wide, standardised (a flat image gives zeros).
   cv::Mat Template(const cv::Mat& image) const;
   // The mean absolute difference of two templates of one size at the best
-  // sideways shift.
+  // sideways shift (the template matcher's CompareTemplates); throws
+  // std::invalid_argument for templates of different sizes.
   double Difference(const cv::Mat& a, const cv::Mat& b) const;
 
   std::string_view Name() const override { return "holistic"; }

@@ -63,8 +63,9 @@ class ObservationModel {
   virtual ~ObservationModel() = default;
   // "fabmap" or "holistic".
   virtual std::string_view Name() const = 0;
-  // Prepares frame `z`. `places` samples the observations of the places the
-  // frame may be at (at most PlacesWanted(), in any order; may be empty).
+  // Prepares frame `z`, which must outlive the score. `places` samples the
+  // observations of the places the frame may be at (at most PlacesWanted(),
+  // in any order; may be empty).
   virtual std::unique_ptr<FrameScore> ScoreFrame(const Observation& z,
                                                  const std::vector<const Observation*>& places) const = 0;
   // How many places ScoreFrame wants to see; 0: it does not use them.
