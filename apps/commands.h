@@ -31,6 +31,9 @@ void AddMapCommand(CLI::App& app, std::ostream& out);
 void AddDemoCommand(CLI::App& app, std::ostream& out);
 void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out);
 
+// The --overwrite flag of every command that writes an output folder.
+void AddOverwriteFlag(CLI::App& command, bool& overwrite);
+
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);
 

@@ -55,6 +55,7 @@ void QuantileRows(const std::vector<FrameEvidence>& frames, const std::string& l
 }
 
 void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
+  OutputDirectory output = OpenOutputDirectory(o.base, "evidence");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "evidence needs ground truth (groundtruth.csv)");
   const std::vector<int> traversals = d.Traversals();
@@ -107,10 +108,9 @@ void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
     }
     md << '\n';
   }
-  const std::filesystem::path dir(o.base.output);
-  CreateDirectories(dir, "output directory");
-  WriteFileAtomically(dir / "evidence.csv", [&](std::ostream& f) { f << csv.str(); });
-  WriteFileAtomically(dir / "summary.md", [&](std::ostream& f) { f << md.str(); });
+  WriteFileAtomically(output.path() / "evidence.csv", [&](std::ostream& f) { f << csv.str(); });
+  WriteFileAtomically(output.path() / "summary.md", [&](std::ostream& f) { f << md.str(); });
+  output.Commit();
   out << md.str();
 }
 
@@ -138,6 +138,7 @@ void AddEvidenceCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
+  AddOverwriteFlag(*cmd, o->base.overwrite);
   cmd->callback([o, &out] { RunEvidence(*o, out); });
 }
 

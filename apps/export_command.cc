@@ -8,6 +8,7 @@
 #include "backend/io/file_error.h"
 #include "backend/io/graph_export.h"
 #include "backend/io/graph_io.h"
+#include "backend/io/output_directory.h"
 #include "backend/io/trajectory_io.h"
 
 namespace catgraph {
@@ -19,6 +20,7 @@ struct ExportOptions {
 };
 
 void RunExport(const ExportOptions& o, std::ostream& out) {
+  RefuseOutputClashes({o.output}, {o.input});
   std::string format = o.format;
   if (format.empty()) {
     format = std::filesystem::path(o.output).extension().string();

@@ -4,6 +4,7 @@
 
 #include "apps/commands.h"
 #include "backend/io/graph_io.h"
+#include "backend/io/output_directory.h"
 #include "simulation/manhattan_world.h"
 
 namespace catgraph {
@@ -16,6 +17,7 @@ struct GenerateGraphOptions {
 };
 
 void RunGenerateGraph(const GenerateGraphOptions& options, std::ostream& out) {
+  RefuseOutputClashes({options.output, options.truth}, {});
   const SimulatedPoseGraph2 simulated = SimulateManhattanWorld(options.world);
   WriteG2oFile(simulated.graph, options.output);
   out << "wrote " << options.output << ": " << simulated.graph.vertices.size() << " poses, "

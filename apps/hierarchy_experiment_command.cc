@@ -63,8 +63,7 @@ std::string Command(const ExperimentOptions& o) {
   return c.str();
 }
 
-void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows) {
-  const std::filesystem::path dir(o.front.output);
+void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const std::filesystem::path& dir) {
   WriteFileAtomically(dir / "hierarchy-experiment.csv", [&](std::ostream& f) {
     f << "seed,hierarchy,false_closures,false_closures_rejected,children,children_accepted,children_of_rejected,"
          "children_of_rejected_accepted,children_turned_off,accepted_children_error_max_m,ate_without_m,"
@@ -127,8 +126,8 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   Validate(optimizer);
   std::vector<HierarchyOptions> policies;
   for (const std::string& h : o.hierarchies) policies.push_back(HierarchyOptionsFor(h, optimizer));
+  OutputDirectory output = OpenOutputDirectory(o.front, "hierarchy-experiment");
   const Dataset d = ReadDataset(o.front.dataset);
-  CreateDirectories(o.front.output, "output directory");
   const Trajectory2 truth = TruthAtFrames(d);
   if (truth.empty()) throw std::invalid_argument(o.front.dataset + ": the experiment needs ground truth");
 
@@ -172,7 +171,8 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
       rows.push_back(row);
     }
   }
-  WriteTables(o, rows);
+  WriteTables(o, rows, output.path());
+  output.Commit();
   out << "wrote " << (std::filesystem::path(o.front.output) / "hierarchy-experiment.md").string() << " and .csv\n";
 }
 
@@ -205,6 +205,7 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  AddOverwriteFlag(*cmd, o->front.overwrite);
   cmd->callback([o, &out] { RunExperiment(*o, out); });
 }
 

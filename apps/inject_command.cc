@@ -6,6 +6,7 @@
 #include "apps/commands.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/graph_io.h"
+#include "backend/io/output_directory.h"
 #include "simulation/outlier_injection.h"
 
 namespace catgraph {
@@ -40,6 +41,7 @@ Eigen::MatrixXd InformationFromValues(const std::vector<double>& values, int dim
 }
 
 void RunInject(InjectOptions o, std::ostream& out) {
+  RefuseOutputClashes({o.output, o.labels}, {o.input});
   ReadGraphOptions read_options;
   read_options.format = *GraphFormatFromString(o.format);
   AnyPoseGraph graph = ReadGraphFile(o.input, read_options).graph;

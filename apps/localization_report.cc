@@ -185,6 +185,12 @@ nlohmann::ordered_json ClosureJson(const LoopClosure& c) {
   return j;
 }
 
+OutputDirectory OpenOutputDirectory(const LocalizeCommandOptions& o, const std::string& command) {
+  std::vector<std::filesystem::path> inputs = {o.dataset};
+  if (!o.vocabulary.empty()) inputs.emplace_back(o.vocabulary);
+  return OutputDirectory(o.output, command, o.overwrite, inputs);
+}
+
 void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const LocalizationResult& r,
                        double closure_threshold) {
   CreateDirectories(dir, "output directory");

@@ -16,6 +16,7 @@
 
 #include "apps/plot/figure.h"
 #include "backend/io/dataset.h"
+#include "backend/io/output_directory.h"
 #include "frontend/localization.h"
 
 namespace catgraph {
@@ -25,8 +26,12 @@ struct LocalizeCommandOptions {
   ObservationKind observation = ObservationKind::kFabMap;
   int words = 500, train_every = 0, threads = 0;
   LocalizationOptions localization;
-  bool quiet = false;
+  bool quiet = false, overwrite = false;
 };
+
+// The output folder of `command` run on `o.dataset` (and `o.vocabulary`):
+// checked before any work, committed by the caller when every file is in it.
+OutputDirectory OpenOutputDirectory(const LocalizeCommandOptions& o, const std::string& command);
 
 // The vocabulary options (--vocabulary, --words, --train-every) on `cmd`.
 void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o);

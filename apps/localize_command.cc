@@ -18,9 +18,11 @@ namespace catgraph {
 namespace {
 
 void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
+  OutputDirectory output = OpenOutputDirectory(o, "localize");
   const Dataset d = ReadDataset(o.dataset);
   const LocalizationResult r = RunLocalization(d, o, out);
-  WriteLocalization(o.output, d, r, o.localization.filter.closure_threshold);
+  WriteLocalization(output.path(), d, r, o.localization.filter.closure_threshold);
+  output.Commit();
   out << "wrote " << o.output << ": ";
   PrintLocalizationSummary(d, r, o.localization.filter.odometric_inference, out);
 }
@@ -39,6 +41,7 @@ struct InferenceSweepOptions {
 // the features extracted once.
 void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
   if (!(o.false_threshold_m > 0.0)) throw std::invalid_argument("--false-threshold: expected > 0");
+  OutputDirectory output = OpenOutputDirectory(o.base, "inference-sweep");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "the sweep needs ground truth (groundtruth.csv)");
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.base, out);
@@ -111,10 +114,9 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
     accepted_table << '\n';
   }
   if (o.back_end) table << accepted_table.str();
-  const std::filesystem::path dir(o.base.output);
-  CreateDirectories(dir, "output directory");
-  WriteFileAtomically(dir / "sweep.csv", [&](std::ostream& f) { f << csv.str(); });
-  WriteFileAtomically(dir / "table.md", [&](std::ostream& f) { f << table.str(); });
+  WriteFileAtomically(output.path() / "sweep.csv", [&](std::ostream& f) { f << csv.str(); });
+  WriteFileAtomically(output.path() / "table.md", [&](std::ostream& f) { f << table.str(); });
+  output.Commit();
   out << table.str();
 }
 
@@ -140,6 +142,7 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
                 "closures vetoed and CAT-Graph+ re-run); also counts the false inferences the back end accepted");
   cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
+  AddOverwriteFlag(*cmd, o->base.overwrite);
   cmd->callback([o, &out] { RunInferenceSweep(*o, out); });
 }
 
@@ -156,6 +159,7 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   AddLocalizationOptions(*cmd, *o);
   cmd->add_option("--threads", o->threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bars");
+  AddOverwriteFlag(*cmd, o->overwrite);
   cmd->callback([o, &out] { RunLocalize(*o, out); });
 }
 

@@ -127,9 +127,9 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   optimizer.method = *RobustMethodFromString(o.method);
   const HierarchyOptions hierarchy_options = HierarchyOptionsFor(o.hierarchy, optimizer);
   Validate(optimizer);
+  OutputDirectory output = OpenOutputDirectory(o.front, "map");
   const Dataset d = ReadDataset(o.front.dataset);
-  const std::filesystem::path dir(o.front.output);
-  CreateDirectories(dir, "output directory");
+  const std::filesystem::path& dir = output.path();
   o.injection.seed = o.front.localization.filter.seed;
   o.front.localization.false_matches = PlanFalseVisualMatches(d, o.front.localization.filter, o.injection);
 
@@ -311,6 +311,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     out << "ATE (RMSE after alignment): odometry " << Number(m.ate_odometry->ate_m.rmse, "%.3f") << " m, corrected map "
         << Number(m.ate_corrected->ate_m.rmse, "%.3f") << " m\n";
   }
+  output.Commit();
   out << "wrote " << o.front.output
       << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum, report.json, map.png/svg, "
          "localization.png/svg, index.html\n";
@@ -348,6 +349,7 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
   cmd->add_flag("--quiet", o->front.quiet, "No progress bars");
+  AddOverwriteFlag(*cmd, o->front.overwrite);
   cmd->callback([o, &out] { RunMap(*o, out); });
 }
 

@@ -8,6 +8,7 @@
 #include "apps/commands.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/graph_io.h"
+#include "backend/io/output_directory.h"
 #include "backend/pose_graph_optimizer.h"
 
 namespace catgraph {
@@ -86,6 +87,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
 }
 
 void RunOptimize(OptimizeOptions options, std::ostream& out) {
+  RefuseOutputClashes({options.output, options.report}, {options.input});
   ReadGraphOptions read_options;
   read_options.format = *GraphFormatFromString(options.format);
   const GraphFile file = ReadGraphFile(options.input, read_options);

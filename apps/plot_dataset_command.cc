@@ -18,6 +18,7 @@
 #include "apps/plot/figure.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
+#include "backend/io/output_directory.h"
 #include "frontend/vocabulary.h"
 
 namespace catgraph {
@@ -132,6 +133,7 @@ Eigen::Vector2d ParsePlace(const std::string& text) {
 
 void RunPlotDataset(const PlotDatasetOptions& o, std::ostream& out) {
   const Dataset d = ReadDataset(o.dataset);
+  RefuseOutputClashes({o.output, o.pair_output}, DatasetFiles(d));
   plot::SaveFigure(PlanFigure(d, o.title), o.output);
   out << "wrote " << o.output << '\n';
   if (!o.pair_at.empty() || !o.pair_output.empty()) {

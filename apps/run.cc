@@ -12,6 +12,12 @@ void AddGraphFormatOption(CLI::App& command, std::string& format) {
       ->capture_default_str();
 }
 
+void AddOverwriteFlag(CLI::App& command, bool& overwrite) {
+  command.add_flag("--overwrite", overwrite,
+                   "Write into an output folder that holds other files (files of the same name are replaced, "
+                   "nothing else is touched); without it such a folder is refused. docs/cli.md \"Outputs\"");
+}
+
 void AddAllCommands(CLI::App& app, std::ostream& out) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "catgraph 0.1.0");

@@ -13,6 +13,7 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
+#include "backend/io/output_directory.h"
 #include "frontend/sad_matcher.h"
 
 namespace catgraph {
@@ -22,6 +23,7 @@ struct SadCommandOptions {
   std::string dataset, output, normalization = "none", localization;
   double tolerance_m = 1.0;
   SadOptions sad;
+  bool overwrite = false;
 };
 
 std::string Fixed(double value, const char* format) {
@@ -33,13 +35,15 @@ std::string Fixed(double value, const char* format) {
 void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
   if (!(o.tolerance_m > 0.0)) throw std::invalid_argument("--tolerance: expected > 0");
   o.sad.normalization = SadNormalizationFromString(o.normalization);
+  std::vector<std::filesystem::path> inputs = {o.dataset};
+  if (!o.localization.empty()) inputs.emplace_back(o.localization);
+  OutputDirectory output(o.output, "sad-match", o.overwrite, inputs);
   const Dataset d = ReadDataset(o.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.dataset, 0, "sad-match needs ground truth (groundtruth.csv)");
   const std::vector<SadMatch> matches = MatchDataset(d, o.sad);
   const double best = BestThreshold(matches, o.tolerance_m);
 
-  const std::filesystem::path dir(o.output);
-  CreateDirectories(dir, "output directory");
+  const std::filesystem::path& dir = output.path();
   WriteFileAtomically(dir / "matches.csv", [&](std::ostream& f) {
     f << "query_frame,template_frame,difference,shift_px,error_m,changed,accepted\n";
     for (const auto& m : matches) {
@@ -113,6 +117,7 @@ void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
   figure.axes = {axes};
   plot::SaveFigure(figure, dir / "sad.png");
   plot::SaveFigure(figure, dir / "sad.svg");
+  output.Commit();
 
   const double n = static_cast<double>(std::max<std::size_t>(1, matches.size()));
   out << "wrote " << o.output << ": " << matches.size() << " queries against the first traversal's templates\n"
@@ -144,6 +149,7 @@ void AddSadMatchCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--every", o->sad.every, "Every N-th frame is a template / a query")->capture_default_str();
   cmd->add_option("--shift", o->sad.max_shift_px, "Sideways shifts tried each way (px)")->capture_default_str();
+  AddOverwriteFlag(*cmd, o->overwrite);
   cmd->callback([o, &out] { RunSadMatch(*o, out); });
 }
 

@@ -1,11 +1,13 @@
 // catgraph simulate --scenario NAME|FILE -o DIR [--seed S] [--frames N]
 // catgraph simulate --list | --print-scenario NAME
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
+#include "backend/io/output_directory.h"
 #include "simulation/office_simulator.h"
 #include "simulation/scenario.h"
 
@@ -17,7 +19,7 @@ struct SimulateCommandOptions {
   std::uint64_t seed = 0;
   std::size_t frames = 0;
   int threads = 0;
-  bool list = false, quiet = false;
+  bool list = false, quiet = false, overwrite = false;
 };
 
 void RunSimulate(const SimulateCommandOptions& o, const CLI::App& command, std::ostream& out) {
@@ -33,13 +35,18 @@ void RunSimulate(const SimulateCommandOptions& o, const CLI::App& command, std::
     throw std::invalid_argument("simulate needs --scenario and -o (or --list, --print-scenario)");
   }
   const Scenario scenario = LoadScenario(o.scenario);
+  std::vector<std::filesystem::path> inputs;  // a scenario file, not a built-in name
+  const std::vector<std::string> built_in = BuiltInScenarioNames();
+  if (std::find(built_in.begin(), built_in.end(), o.scenario) == built_in.end()) inputs.emplace_back(o.scenario);
+  OutputDirectory output(o.output, "simulate", o.overwrite, inputs);
   SimulationOptions options;
   if (command.count("--seed") > 0) options.seed = o.seed;
   options.max_frames = o.frames;
   options.threads = o.threads;
   auto bar = std::make_shared<ProgressBar>("frames");
   if (!o.quiet) options.on_progress = [bar](std::size_t done, std::size_t total) { bar->Update(done, total); };
-  const SimulationSummary s = SimulateDataset(scenario, o.output, options);
+  const SimulationSummary s = SimulateDataset(scenario, output.path(), options);
+  output.Commit();
   out << "wrote " << o.output << ": scenario " << scenario.name << ", seed "
       << options.seed.value_or(scenario.seed) << ", " << s.frames << " frames (";
   for (std::size_t i = 0; i < s.frames_per_traversal.size(); ++i) {
@@ -74,6 +81,7 @@ void AddSimulateCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--list", o->list, "List the built-in scenarios");
   cmd->add_option("--print-scenario", o->print, "Print a built-in scenario's YAML (to copy and edit)");
   cmd->add_flag("--quiet", o->quiet, "No progress bar");
+  AddOverwriteFlag(*cmd, o->overwrite);
   cmd->callback([o, cmd, &out] { RunSimulate(*o, *cmd, out); });
 }
 

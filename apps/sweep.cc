@@ -1,6 +1,7 @@
 #include "apps/sweep.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -187,7 +188,8 @@ std::string HeaderLine() {
 }
 
 // Reads the finished rows of a sweep CSV; with `repair`, cuts a trailing
-// incomplete line (a run interrupted while writing) off the file.
+// incomplete line (a run interrupted while writing) off the file, but only
+// once the rest has been read as a sweep CSV.
 std::vector<SweepRow> ReadRows(const std::filesystem::path& path, bool repair) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError(path.string(), 0, "cannot open the sweep CSV");
@@ -197,16 +199,14 @@ std::vector<SweepRow> ReadRows(const std::filesystem::path& path, bool repair) {
   std::vector<SweepRow> rows;
   if (content.empty()) return rows;
   const std::size_t complete = content.rfind('\n') == std::string::npos ? 0 : content.rfind('\n') + 1;
-  if (complete < content.size()) {
-    if (!repair) {
-      throw FileError(path.string(), 0, "the last line is incomplete (an interrupted sweep?); "
-                                        "rerun the sweep to repair it");
-    }
-    in.close();
-    std::filesystem::resize_file(path, complete);
-    content.resize(complete);
+  if (complete == 0) {
+    throw FileError(path.string(), 1, "expected the sweep CSV header '" + HeaderLine() + "'");
   }
-  std::stringstream lines(content);
+  if (complete < content.size() && !repair) {
+    throw FileError(path.string(), 0, "the last line is incomplete (an interrupted sweep?); "
+                                      "rerun the sweep to repair it");
+  }
+  std::stringstream lines(content.substr(0, complete));
   std::string line;
   int number = 0;
   const auto& columns = SweepColumns();
@@ -230,6 +230,10 @@ std::vector<SweepRow> ReadRows(const std::filesystem::path& path, bool repair) {
     for (std::size_t k = 0; k < columns.size(); ++k) row[columns[k]] = fields[k];
     rows.push_back(std::move(row));
   }
+  if (complete < content.size()) {
+    in.close();
+    std::filesystem::resize_file(path, complete);
+  }
   return rows;
 }
 
@@ -239,12 +243,18 @@ std::string KeyOf(const SweepRow& row) {
 }
 
 // Appends whole lines with one write(2) each and syncs, so a crash leaves at
-// most one incomplete line, which ReadRows(repair) removes.
+// most one incomplete line, which ReadRows(repair) removes. Holds an
+// exclusive lock on the file while it lives: a second sweep on the same CSV
+// is refused rather than running every row twice.
 class CsvAppender {
  public:
   explicit CsvAppender(const std::filesystem::path& path) : path_(path.string()) {
     fd_ = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
     if (fd_ < 0) throw FileError(path_, 0, "cannot open the sweep CSV for appending");
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw FileError(path_, 0, "another sweep is writing this CSV; wait for it or give another -o");
+    }
   }
   ~CsvAppender() { ::close(fd_); }
   CsvAppender(const CsvAppender&) = delete;
@@ -436,13 +446,15 @@ SweepSummary RunSweep(const SweepConfig& config, const SweepOptions& options) {
       options.shard.index >= options.shard.count) {
     throw std::invalid_argument("bad shard");
   }
-  // Finished runs, and a fresh file with its header.
+  // Finished runs, and a fresh file with its header. The lock is taken
+  // first, so that a second sweep neither reads nor repairs the file.
+  CsvAppender csv(config.output);
   std::set<std::string> finished;
   std::error_code ec;
-  if (std::filesystem::exists(config.output, ec) && std::filesystem::file_size(config.output, ec) > 0) {
+  if (std::filesystem::file_size(config.output, ec) > 0) {
     for (const SweepRow& row : ReadRows(config.output, /*repair=*/true)) finished.insert(KeyOf(row));
   } else {
-    WriteFileAtomically(config.output, [](std::ostream& out) { out << HeaderLine() << '\n'; });
+    csv.Append(HeaderLine());
   }
   SweepSummary summary;
   std::vector<SweepRun> todo;
@@ -464,7 +476,6 @@ SweepSummary RunSweep(const SweepConfig& config, const SweepOptions& options) {
     data.emplace(d.name, std::move(loaded));
   }
 
-  CsvAppender csv(config.output);
   std::mutex mutex;  // guards csv, summary, progress and error
   std::exception_ptr error;
   std::atomic<std::size_t> next{0};

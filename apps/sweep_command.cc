@@ -13,6 +13,7 @@
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "apps/sweep.h"
+#include "backend/io/output_directory.h"
 
 namespace catgraph {
 namespace {
@@ -43,6 +44,12 @@ void RunSweepCommand(const SweepCommandOptions& o, std::ostream& out) {
   if (config.output.empty()) {
     throw std::invalid_argument("no output CSV: give -o or 'output' in " + o.config);
   }
+  std::vector<std::filesystem::path> inputs = {o.config};
+  for (const SweepDataset& d : config.datasets) {
+    inputs.push_back(d.graph);
+    inputs.push_back(d.truth);
+  }
+  RefuseOutputClashes({config.output}, inputs);
   SweepOptions options;
   options.shard = ParseShard(o.shard);
   options.jobs = o.jobs;
@@ -97,6 +104,7 @@ void AddSweepCommand(CLI::App& app, std::ostream& out) {
   merge->add_option("--plot", o->merge_plot, "Also write PREFIX-<dataset>.png/.svg/.md");
   merge->callback([o, &out] {
     std::vector<std::filesystem::path> inputs(o->merge_inputs.begin(), o->merge_inputs.end());
+    RefuseOutputClashes({o->merge_output}, inputs);
     MergeSweepCsv(inputs, o->merge_output);
     out << "wrote " << o->merge_output << '\n';
     if (!o->merge_plot.empty()) PrintWritten(PlotSweep(o->merge_output, o->merge_plot), out);

@@ -9,6 +9,7 @@
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "backend/io/dataset.h"
+#include "backend/io/output_directory.h"
 #include "frontend/vocabulary.h"
 
 namespace catgraph {
@@ -30,6 +31,7 @@ void RunTrain(const VocabularyCommandOptions& o, std::ostream& out) {
   std::vector<std::filesystem::path> paths;
   for (const auto& name : o.datasets) {
     const Dataset d = ReadDataset(name);
+    RefuseOutputClashes({o.output}, DatasetFiles(d));
     for (std::size_t i = 0; i < d.frames.size(); i += o.every) {
       if (o.traversal == 0 || d.frames[i].traversal == o.traversal) paths.push_back(d.ImagePath(i));
     }

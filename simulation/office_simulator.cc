@@ -32,16 +32,6 @@ std::string ImageName(std::size_t index) {
   return name;
 }
 
-void RemoveStaleImages(const std::filesystem::path& images, std::size_t count) {
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(images, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() != 10 || !name.ends_with(".png")) continue;
-    if (!std::all_of(name.begin(), name.begin() + 6, [](char c) { return c >= '0' && c <= '9'; })) continue;
-    if (std::stoul(name.substr(0, 6)) >= count) std::filesystem::remove(entry.path(), ec);
-  }
-}
-
 }  // namespace
 
 std::uint64_t FrameNoiseSeed(std::uint64_t seed, std::size_t index) {
@@ -142,7 +132,6 @@ SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesyste
   }
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
-  RemoveStaleImages(directory / "images", planned.size());
 
   Dataset d;
   d.root = directory;

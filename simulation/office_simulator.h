@@ -59,10 +59,10 @@ struct SimulationSummary {
   double duration_s = 0.0;         // simulated time
 };
 
-// Writes the dataset into `directory` (created if needed; files of an
-// earlier dataset there are replaced, stale images removed). Every file is
-// written atomically. Throws std::invalid_argument, std::runtime_error or
-// FileError.
+// Writes the dataset into `directory` (created if needed; files of the same
+// name are replaced, nothing is deleted: give a new folder, or stage one with
+// OutputDirectory as `catgraph simulate` does). Every file is written
+// atomically. Throws std::invalid_argument, std::runtime_error or FileError.
 SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesystem::path& directory,
                                   const SimulationOptions& options);
 

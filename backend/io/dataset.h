@@ -105,6 +105,10 @@ Dataset ReadDataset(const std::filesystem::path& root);
 // (the same checks ReadDataset makes, except image existence).
 void WriteDatasetTables(const Dataset& dataset);
 
+// Every file of `dataset` that ReadDataset read or that its frames name: the
+// tables, meta.json and the images.
+std::vector<std::filesystem::path> DatasetFiles(const Dataset& dataset);
+
 // The pose at time t, interpolated linearly between the two samples around it
 // (heading along the shorter arc). Throws std::out_of_range outside the
 // samples' time range; `poses` must be sorted by time.

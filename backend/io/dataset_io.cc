@@ -252,17 +252,23 @@ void CheckConsistency(const Dataset& d, FailFn fail) {
                std::to_string(i + 2) + " (changed " + (d.frames[i].changed ? "1" : "0") + ")");
     }
   }
-  const double t0 = d.odometry.front().timestamp_s, t1 = d.odometry.back().timestamp_s;
-  for (std::size_t i = 0; i < d.frames.size(); ++i) {
-    const double t = d.frames[i].timestamp_s;
-    if (t < t0 || t > t1) {
-      char range[96];
-      std::snprintf(range, sizeof range, "[%.6f, %.6f]", t0, t1);
-      fail("frames.csv", static_cast<int>(i) + 2,
-           "frame timestamp " + std::to_string(t) + " lies outside the odometry's time range " +
-               range + "; expected every frame to have odometry");
+  // Every frame has odometry and, when there is ground truth, a true pose:
+  // both are interpolated at the frame times.
+  auto check_covers = [&](const std::vector<TimedPose2>& poses, const char* file, const char* what) {
+    const double t0 = poses.front().timestamp_s, t1 = poses.back().timestamp_s;
+    for (std::size_t i = 0; i < d.frames.size(); ++i) {
+      const double t = d.frames[i].timestamp_s;
+      if (t < t0 || t > t1) {
+        char range[96];
+        std::snprintf(range, sizeof range, "[%.6f, %.6f]", t0, t1);
+        fail("frames.csv", static_cast<int>(i) + 2,
+             "frame timestamp " + std::to_string(t) + " lies outside the time range " + range + " of " + file +
+                 "; expected every frame to have " + what);
+      }
     }
-  }
+  };
+  check_covers(d.odometry, "odometry.csv", "odometry");
+  if (d.HasGroundTruth()) check_covers(d.ground_truth, "groundtruth.csv", "a ground-truth pose");
 }
 
 void WriteCsv(const std::filesystem::path& path, const std::string& header,
@@ -314,6 +320,13 @@ Dataset ReadDataset(const std::filesystem::path& root) {
     throw FileError((root / file).string(), line, message);
   });
   return d;
+}
+
+std::vector<std::filesystem::path> DatasetFiles(const Dataset& d) {
+  std::vector<std::filesystem::path> files = {d.root / "frames.csv", d.root / "odometry.csv", d.root / "meta.json"};
+  if (d.HasGroundTruth()) files.push_back(d.root / "groundtruth.csv");
+  for (std::size_t i = 0; i < d.frames.size(); ++i) files.push_back(d.ImagePath(i));
+  return files;
 }
 
 void WriteDatasetTables(const Dataset& d) {

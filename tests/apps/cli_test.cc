@@ -1,5 +1,11 @@
 // The `catgraph` command run in process, exactly as main() runs it.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -359,6 +365,73 @@ TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps
   CHECK(ReadSweepCsv(dir / "merged.csv").size() == 8);
   const Result no_config = Run({"sweep"});
   CHECK(no_config.status == 2);
+  std::filesystem::remove_all(dir);
+}
+
+// Every command that writes refuses, before any work, to write over one of
+// its inputs or into a folder of the user's; the inputs stay byte for byte.
+TEST_CASE("no command writes over its input or into a folder catgraph did not write", "[apps][output]") {
+  const auto dir = testing::TempDir("cli_outputs");
+  const std::string g = (dir / "g.g2o").string(), t = (dir / "t.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", g, "--truth", t, "--poses", "60"}).status == 0);
+  const std::string data = (dir / "data").string();
+  REQUIRE(Run({"simulate", "--scenario", "office-change", "-o", data, "--frames", "8", "--quiet"}).status == 0);
+  std::ofstream(dir / "notes.csv") << "my,own\n1,2\n3,4";  // not a sweep's, no final newline
+  std::filesystem::create_directories(dir / "user" / "images");
+  std::ofstream(dir / "user" / "images" / "000000.png") << "mine";
+
+  auto snapshot = [&] {
+    std::map<std::string, std::string> files;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir)) {
+      if (e.is_regular_file()) files[e.path().string()] = testing::ReadText(e.path());
+    }
+    return files;
+  };
+  const auto before = snapshot();
+  const std::string sweep = (dir / "sweep.yaml").string();
+  std::ofstream(sweep) << "datasets:\n  - {name: sim, graph: g.g2o}\nmethods: [none]\npolicies: [random]\n"
+                          "outliers: [0]\nseeds: 1\n";
+  const std::vector<std::vector<std::string>> refused = {
+      {"simulate", "--scenario", "office-change", "-o", (dir / "user").string(), "--frames", "2", "--quiet"},
+      {"optimize", g, "-o", g},
+      {"optimize", g, "-o", (dir / "o.g2o").string(), "--report", g},
+      {"inject", g, "-o", (dir / "i.g2o").string(), "--outliers", "5", "--labels", g},
+      {"inject", g, "-o", (dir / "." / "g.g2o").string(), "--outliers", "5"},
+      {"generate-graph", "-o", (dir / "x.g2o").string(), "--truth", (dir / "x.g2o").string()},
+      {"export", g, "-o", g},
+      {"vocabulary", "train", data, "-o", data + "/frames.csv"},
+      {"plot-dataset", data, "-o", data + "/images/000000.png"},
+      {"localize", data, "-o", data, "--quiet"},
+      {"map", data, "-o", dir.string(), "--quiet"},
+      {"sad-match", data, "-o", data},
+      {"sweep", "--config", sweep, "-o", g},
+      {"sweep", "--config", sweep, "-o", (dir / "notes.csv").string(), "--quiet"},
+      {"sweep", "merge", (dir / "notes.csv").string(), "-o", (dir / "notes.csv").string()},
+  };
+  for (const auto& args : refused) {
+    std::string line;
+    for (const auto& a : args) line += a + " ";
+    INFO(line);
+    const Result r = Run(args);
+    CHECK(r.status == 1);
+    CHECK(r.err.find("catgraph: error: ") == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  std::remove((dir / "sweep.yaml").c_str());
+  CHECK(snapshot() == before);
+
+  // Two sweeps on one CSV: the second is refused while the first holds it.
+  std::ofstream(sweep) << "datasets:\n  - {name: sim, graph: g.g2o}\nmethods: [none]\npolicies: [random]\n"
+                          "outliers: [0]\nseeds: 1\n";
+  const std::string csv = (dir / "runs.csv").string();
+  const int fd = ::open(csv.c_str(), O_WRONLY | O_CREAT, 0644);
+  REQUIRE(::flock(fd, LOCK_EX) == 0);
+  const Result locked = Run({"sweep", "--config", sweep, "-o", csv, "--quiet"});
+  CHECK(locked.status == 1);
+  CHECK(locked.err.find("another sweep is writing this CSV") != std::string::npos);
+  ::close(fd);
+  CHECK(Run({"sweep", "--config", sweep, "-o", csv, "--quiet"}).status == 0);
+  CHECK(ReadSweepCsv(csv).size() == 1);
   std::filesystem::remove_all(dir);
 }
 

@@ -1,7 +1,8 @@
 // Killed half-way with SIGKILL, catgraph leaves no torn file under a final
-// name (everything is written to a temporary file and renamed, the sweep's
-// CSV grows by whole lines), and a rerun completes; the sweep resumes without
-// repeating the runs it had finished. Issue #9; docs/fuzzing.md.
+// name and no mix of old and new outputs (an output folder is staged and
+// swapped into place whole, the sweep's CSV grows by whole lines), and a
+// rerun completes; the sweep resumes without repeating the runs it had
+// finished. docs/cli.md "Outputs".
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -114,34 +115,61 @@ std::vector<double> KillTimes(int n, double lo, double hi, unsigned seed) {
   return t;
 }
 
-TEST_CASE("simulate and map killed at random points leave no torn file and a rerun completes",
+// The names in `dir`, hidden ones included, sorted.
+std::vector<std::string> Listing(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) names.push_back(entry.path().filename());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST_CASE("simulate and map killed at random points leave the earlier output whole and a rerun replaces it",
           "[apps][kill][slow]") {
   const auto root = testing::TempDir("kill_simulate_map");
   const std::string data = (root / "data").string(), map = (root / "map").string();
-  const std::vector<std::string> simulate = {"simulate", "--scenario", "office-change", "--frames", "400",
-                                             "-o", data, "--threads", "1", "--quiet"};
+  auto simulate = [&](const char* frames) {
+    return std::vector<std::string>{"simulate", "--scenario", "office-change", "--frames", frames,
+                                    "-o",       data,           "--threads",     "1",      "--quiet"};
+  };
+  REQUIRE(Run(simulate("100")) == 0);
+  const std::string old_frames = Slurp(std::filesystem::path(data) / "frames.csv");
   int killed = 0;
   for (const double t : KillTimes(4, 0.05, 1.5, 11)) {
     CAPTURE(t);
-    killed += Run(simulate, After(t)) == -1;
-    if (std::filesystem::exists(data)) CheckNoTornFile(data);
+    killed += Run(simulate("400"), After(t)) == -1;
+    CheckNoTornFile(data);
+    CHECK(Slurp(std::filesystem::path(data) / "frames.csv") == old_frames);  // the old dataset, whole
+    CHECK(ReadDataset(data).frames.size() == 100);
   }
   CHECK(killed > 0);
-  REQUIRE(Run(simulate) == 0);
-  CHECK(CheckNoTornFile(data) > 400);  // the images and the tables
+  REQUIRE(Run(simulate("400")) == 0);
+  CHECK(CheckNoTornFile(data) > 400);  // the images, the tables and the manifest
   CHECK(ReadDataset(data).frames.size() == 400);
+  CHECK(Listing(root) == std::vector<std::string>{"data"});  // the killed runs' staging folders are gone
 
   const std::vector<std::string> mapping = {"map", data, "-o", map, "--quiet", "--threads", "1"};
+  const std::filesystem::path report = std::filesystem::path(map) / "report.json";
   killed = 0;
   for (const double t : KillTimes(4, 0.2, 4.0, 12)) {
     CAPTURE(t);
     killed += Run(mapping, After(t)) == -1;
-    if (std::filesystem::exists(map)) CheckNoTornFile(map);
+    CHECK_FALSE(std::filesystem::exists(map));  // all or nothing
+  }
+  CHECK(killed > 0);
+  REQUIRE(Run(mapping) == 0);
+  const std::string first = Slurp(report);
+  CHECK(nlohmann::json::parse(first).at("frames") == 400);
+  killed = 0;
+  for (const double t : KillTimes(2, 0.2, 4.0, 13)) {
+    CAPTURE(t);
+    killed += Run(mapping, After(t)) == -1;
+    CheckNoTornFile(map);
+    CHECK(Slurp(report) == first);
   }
   CHECK(killed > 0);
   REQUIRE(Run(mapping) == 0);
   CheckNoTornFile(map);
-  CHECK(nlohmann::json::parse(Slurp(std::filesystem::path(map) / "report.json")).at("frames") == 400);
+  CHECK(Listing(root) == std::vector<std::string>{"data", "map"});
   std::filesystem::remove_all(root);
 }
 

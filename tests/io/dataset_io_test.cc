@@ -86,7 +86,13 @@ TEST_CASE("inconsistent datasets are errors naming the file and the line", "[io]
 
   fresh();
   Replace(root / "odometry.csv", "\n1.000000,", "\n0.600000,");
-  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:4: frame timestamp 0.750000 lies outside the odometry's time range"));
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:4: frame timestamp 0.750000 lies outside the time range [0.000000, 0.600000] of odometry.csv"));
+
+  // Ground truth that ends before the last frame: an input error, not an
+  // interpolation failure deep inside a command.
+  fresh();
+  Replace(root / "groundtruth.csv", "\n1.000000,", "\n0.600000,");
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:4: frame timestamp 0.750000 lies outside the time range [0.000000, 0.600000] of groundtruth.csv; expected every frame to have a ground-truth pose"));
 
   fresh();
   Replace(root / "odometry.csv", "\n0.500000,", "\n0.000000,");
