@@ -31,6 +31,10 @@ void AddMapCommand(CLI::App& app, std::ostream& out);
 void AddDemoCommand(CLI::App& app, std::ostream& out);
 void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out);
 
+// The largest --threads and --jobs: more threads than this buy nothing on
+// any machine catgraph runs on, and each costs a stack.
+inline constexpr int kMaxThreads = 256;
+
 // The --overwrite flag of every command that writes an output folder.
 void AddOverwriteFlag(CLI::App& command, bool& overwrite);
 

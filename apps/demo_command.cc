@@ -39,7 +39,9 @@ void RunStep(const std::vector<std::string>& args, std::ostream& out) {
   out << line << '\n';
   std::ostringstream err;
   if (RunCatgraph(static_cast<int>(argv.size()), argv.data(), out, err) != 0) {
-    throw std::runtime_error("demo step failed: " + line + "\n" + err.str());
+    std::string why = err.str();
+    while (!why.empty() && why.back() == '\n') why.pop_back();
+    throw std::runtime_error("demo step failed: " + line + " -- " + why);
   }
 }
 

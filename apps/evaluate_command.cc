@@ -63,15 +63,26 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
   } catch (const std::invalid_argument& e) {
     throw FileError(o.estimate, 0, e.what());
   }
-  const TrajectoryEvaluation t = EvaluateTrajectory(estimated, truth);
+  // A pose without truth is the truth file's fault (or the pairing's).
+  const TrajectoryEvaluation t = [&] {
+    try {
+      return EvaluateTrajectory(estimated, truth);
+    } catch (const std::invalid_argument& e) {
+      throw FileError(o.truth, 0, e.what());
+    }
+  }();
   std::optional<ClosureScores> scores;
   if (!o.labels.empty()) {
     std::vector<ClosureOutcome> outcomes =
         o.report.empty() ? ClosureOutcomesOf(estimate) : OutcomesFromReport(o.report);
     AttachChi2AtTruth(outcomes, estimate, truth);
     const int dof = std::holds_alternative<PoseGraph2>(estimate) ? 3 : 6;
-    scores = ScoreClosures(outcomes, ReadClosureLabelsFile(o.labels),
-                           ChiSquareQuantile(dof, o.truth_gate_probability));
+    std::vector<int> lines;
+    const std::vector<ClosureLabel> labels = ReadClosureLabelsFile(o.labels, &lines);
+    if (const auto mismatch = FindLabelMismatch(estimate, labels)) {
+      throw FileError(o.labels, mismatch->label ? lines[*mismatch->label] : 0, mismatch->message);
+    }
+    scores = ScoreClosures(outcomes, labels, ChiSquareQuantile(dof, o.truth_gate_probability));
   }
   constexpr double kDeg = 180.0 / std::numbers::pi;
   if (o.json) {

@@ -39,7 +39,9 @@ void AddGenerateGraphCommand(CLI::App& app, std::ostream& out) {
       "gives the same file.");
   cmd->add_option("-o,--output", options->output, "Output g2o file (noisy graph)")->required();
   cmd->add_option("--truth", options->truth, "Also write the ground-truth graph here");
-  cmd->add_option("--poses", w.num_poses, "Number of poses")->capture_default_str();
+  cmd->add_option("--poses", w.num_poses, "Number of poses")
+      ->check(CLI::Range(2, kMaxManhattanPoses))
+      ->capture_default_str();
   cmd->add_option("--seed", w.seed, "Random seed")->capture_default_str();
   cmd->add_option("--grid-cells", w.grid_cells, "Side of the square the walk stays in, in steps")
       ->capture_default_str();

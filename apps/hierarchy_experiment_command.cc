@@ -204,7 +204,9 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
                   "cascade and coupled: front-end re-runs with the rejected visual closures vetoed (as catgraph map)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   AddOverwriteFlag(*cmd, o->front.overwrite);
   cmd->callback([o, &out] { RunExperiment(*o, out); });
 }

@@ -1,4 +1,5 @@
 // catgraph inject IN -o OUT --outliers N [--policy P] [--group-size G] ...
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -83,7 +84,9 @@ void AddInjectCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("input", o->input, "Pose-graph file (g2o, TORO, iSAM)")->required();
   cmd->add_option("-o,--output", o->output, "Spoiled graph (g2o)")->required();
   AddGraphFormatOption(*cmd, o->format);
-  cmd->add_option("--outliers", o->outliers.count, "Number of false edges")->required();
+  cmd->add_option("--outliers", o->outliers.count, "Number of false edges")
+      ->check(CLI::Range(0, kMaxOutliers))
+      ->required();
   cmd->add_option("--policy", o->policy,
                   "random, local (pairs at most --local-window apart), random-grouped, "
                   "local-grouped, or hierarchical (a false visual closure and its "
@@ -93,9 +96,11 @@ void AddInjectCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--group-size", o->outliers.group_size,
                   "Edges per group; 0 = the policy's default (1, or 5 for grouped and "
                   "hierarchical)")
+      ->check(CLI::Range(0, kMaxOutlierGroupSize))
       ->capture_default_str();
   cmd->add_option("--local-window", o->outliers.local_window,
                   "Largest pose-id gap of a local pair")
+      ->check(CLI::Range(2, std::numeric_limits<int>::max()))
       ->capture_default_str();
   cmd->add_option("--seed", o->outliers.seed, "Random seed")->capture_default_str();
   cmd->add_option("--information", o->information,

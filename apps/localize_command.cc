@@ -140,7 +140,9 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--back-end", o->back_end,
                 "Map each cell as catgraph map does with its defaults (switchable, cascade, the rejected visual "
                 "closures vetoed and CAT-Graph+ re-run); also counts the false inferences the back end accepted");
-  cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
   AddOverwriteFlag(*cmd, o->base.overwrite);
   cmd->callback([o, &out] { RunInferenceSweep(*o, out); });
@@ -157,7 +159,9 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("dataset", o->dataset, "Dataset directory")->required();
   cmd->add_option("-o,--output", o->output, "Output directory")->required();
   AddLocalizationOptions(*cmd, *o);
-  cmd->add_option("--threads", o->threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Feature-extraction threads (0: every core)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bars");
   AddOverwriteFlag(*cmd, o->overwrite);
   cmd->callback([o, &out] { RunLocalize(*o, out); });

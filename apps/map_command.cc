@@ -347,7 +347,9 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
                   "and solve again, at most this many times (0: off). docs/mapping.md")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")->capture_default_str();
+  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->front.quiet, "No progress bars");
   AddOverwriteFlag(*cmd, o->front.overwrite);
   cmd->callback([o, &out] { RunMap(*o, out); });

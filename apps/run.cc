@@ -59,19 +59,19 @@ int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostre
     out << "catgraph 0.1.0\n";
     return 0;
   } catch (const CLI::ParseError& e) {
-    err << "catgraph: " << e.what() << "\nRun 'catgraph --help' for the commands and options.\n";
+    err << "catgraph: " << PrintableText(e.what()) << "\nRun 'catgraph --help' for the commands and options.\n";
     return 2;
   } catch (const FileError& e) {
-    err << "catgraph: error: " << e.what() << '\n';
+    err << "catgraph: error: " << PrintableText(e.what()) << '\n';
     return 1;
   } catch (const std::invalid_argument& e) {
-    err << "catgraph: error: " << e.what() << '\n';
+    err << "catgraph: error: " << PrintableText(e.what()) << '\n';
     return 1;
   } catch (const std::runtime_error& e) {
-    err << "catgraph: error: " << e.what() << '\n';
+    err << "catgraph: error: " << PrintableText(e.what()) << '\n';
     return 1;
   } catch (const std::exception& e) {
-    err << "catgraph: internal error: " << e.what() << '\n';
+    err << "catgraph: internal error: " << PrintableText(e.what()) << '\n';
     return 3;
   }
   return 0;

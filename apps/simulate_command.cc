@@ -77,7 +77,9 @@ void AddSimulateCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("-o,--output", o->output, "Dataset directory to write (docs/dataset-format.md)");
   cmd->add_option("--seed", o->seed, "Noise seed (default: the scenario's)");
   cmd->add_option("--frames", o->frames, "Stop after this many frames (0: all)")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Rendering threads (0: every core)")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Rendering threads (0: every core)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   cmd->add_flag("--list", o->list, "List the built-in scenarios");
   cmd->add_option("--print-scenario", o->print, "Print a built-in scenario's YAML (to copy and edit)");
   cmd->add_flag("--quiet", o->quiet, "No progress bar");

@@ -26,6 +26,7 @@
 #include "backend/io/graph_io.h"
 #include "backend/io/trajectory_io.h"
 #include "backend/io/json_integer.h"
+#include "backend/io/yaml_text.h"
 
 namespace catgraph {
 namespace {
@@ -129,7 +130,7 @@ SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& ba
   }
   if (j.contains("outliers")) {
     c.outliers = ListOf<int>(j, "outliers", [](const nlohmann::json& n) {
-      return static_cast<int>(IntegerIn(n, "outliers", 0, 10'000'000));
+      return static_cast<int>(IntegerIn(n, "outliers", 0, kMaxOutliers));
     });
   }
   if (j.contains("seeds")) {
@@ -375,7 +376,7 @@ SweepConfig ReadSweepConfigFile(const std::filesystem::path& path) {
   nlohmann::json j;
   try {
     if (ext == ".yaml" || ext == ".yml") {
-      j = YamlToJson(YAML::Load(text));
+      j = YamlToJson(LoadYamlWithoutAliases(text, name));
     } else {
       j = nlohmann::json::parse(text);
     }
@@ -509,9 +510,9 @@ SweepSummary RunSweep(const SweepConfig& config, const SweepOptions& options) {
   };
   const int jobs = options.jobs > 0 ? options.jobs
                                     : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  std::vector<std::thread> threads;
+  std::vector<std::jthread> threads;  // joined on the way out should starting one fail
   for (int t = 0; t < std::min<int>(jobs, static_cast<int>(todo.size())); ++t) threads.emplace_back(worker);
-  for (std::thread& t : threads) t.join();
+  for (std::jthread& t : threads) t.join();
   if (error) std::rethrow_exception(error);
   summary.stopped = summary.finished < todo.size();
   return summary;

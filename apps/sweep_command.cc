@@ -90,7 +90,9 @@ void AddSweepCommand(CLI::App& app, std::ostream& out) {
       "methods) on every core, appending each finished run to a CSV; rerun to resume.");
   cmd->add_option("--config", o->config, "Sweep configuration (JSON, or YAML: .yaml/.yml)");
   cmd->add_option("-o,--output", o->output, "CSV of finished runs (default: 'output' of the config)");
-  cmd->add_option("--jobs", o->jobs, "Parallel runs; 0 = every core")->capture_default_str();
+  cmd->add_option("--jobs", o->jobs, "Parallel runs; 0 = every core")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
   cmd->add_option("--shard", o->shard,
                   "Run only slice i of n (0 <= i < n): run k belongs to shard k mod n")
       ->capture_default_str();

@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -159,6 +160,47 @@ std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
         return outcomes;
       },
       graph);
+}
+
+std::optional<LabelMismatch> FindLabelMismatch(const AnyPoseGraph& graph, const std::vector<ClosureLabel>& labels) {
+  using Pair = std::pair<PoseId, PoseId>;
+  auto key = [](PoseId a, PoseId b) { return a < b ? Pair{a, b} : Pair{b, a}; };
+  std::map<Pair, int> closures;  // loop closures between two poses, either direction
+  std::set<PoseId> poses;
+  std::visit(
+      [&](const auto& g) {
+        for (const auto& [id, vertex] : g.vertices) poses.insert(id);
+        for (const auto& c : g.constraints) {
+          if (!c.IsBetweenConsecutivePoses()) ++closures[key(c.from, c.to)];
+        }
+      },
+      graph);
+  std::map<Pair, int> labelled;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const ClosureLabel& l = labels[i];
+    for (const PoseId p : {l.from, l.to}) {
+      if (!poses.contains(p)) {
+        return LabelMismatch{i, "pose " + std::to_string(p.value()) + " is not in the estimate; expected the labels "
+                                "of this graph (catgraph inject --labels)"};
+      }
+    }
+    const Pair k = key(l.from, l.to);
+    const auto present = closures.find(k);
+    // A label without its closure is one the optimiser dropped (rejected);
+    // more labels than closures where some remain is a repeated row.
+    if (++labelled[k] > 1 && present != closures.end() && labelled[k] > present->second) {
+      return LabelMismatch{i, "closure " + std::to_string(l.from.value()) + "-" + std::to_string(l.to.value()) +
+                                  " is labelled more often than the estimate has it (a repeated row?)"};
+    }
+  }
+  for (const auto& [k, count] : closures) {
+    if (labelled[k] < count) {
+      return LabelMismatch{std::nullopt, "has no label for the estimate's closure " + std::to_string(k.first.value()) +
+                                             "-" + std::to_string(k.second.value()) +
+                                             "; expected one row per loop closure"};
+    }
+  }
+  return std::nullopt;
 }
 
 ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,

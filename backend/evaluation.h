@@ -7,6 +7,8 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "backend/graph/closure_label.h"
@@ -95,6 +97,16 @@ struct ClosureScores {
 // 0.999)).
 ClosureScores ScoreClosures(const std::vector<ClosureOutcome>& outcomes,
                             const std::vector<ClosureLabel>& labels, double truth_gate = 0.0);
+
+// What keeps `labels` from scoring the loop closures of `graph`, else
+// nothing: a label naming a pose the graph lacks, more labels than closures
+// between two poses (a row repeated), or a closure without a label (rows
+// missing). `label` is the index of the label at fault, when one is.
+struct LabelMismatch {
+  std::optional<std::size_t> label;
+  std::string message;
+};
+std::optional<LabelMismatch> FindLabelMismatch(const AnyPoseGraph& graph, const std::vector<ClosureLabel>& labels);
 
 // Sets each outcome's chi2_at_truth from the loop closure of `graph` with the
 // same endpoints (either direction, matched in order as ScoreClosures does)

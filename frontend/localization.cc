@@ -52,7 +52,7 @@ std::vector<Observation> ExtractObservations(const Dataset& d, const Vocabulary*
     }
   };
   const int n = options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::vector<std::thread> pool;
+  std::vector<std::jthread> pool;  // joined on the way out should starting one fail
   for (int i = 1; i < n; ++i) pool.emplace_back(work, false);
   work(true);  // the calling thread works too, and reports
   for (auto& t : pool) t.join();

@@ -20,6 +20,7 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/file_error.h"
 #include "backend/io/internal/text_line.h"
+#include "backend/io/yaml_text.h"
 
 namespace catgraph {
 namespace {
@@ -100,6 +101,19 @@ std::optional<std::pair<std::uint32_t, std::uint32_t>> DeclaredSize(const std::s
   return std::nullopt;
 }
 
+// A PNG or JPEG cut short (a copy or download that did not finish): refused
+// here, before the decoder prints its own complaint to stderr.
+std::optional<std::string> TruncationOf(const std::string& b) {
+  static constexpr std::string_view kPngSignature = "\x89PNG\r\n\x1a\n";
+  if (b.starts_with(kPngSignature)) {
+    const std::size_t end = b.rfind("IEND");
+    if (end == std::string::npos || end + 8 > b.size()) return "a PNG without its end (IEND) chunk";
+  } else if (b.starts_with("\xff\xd8")) {
+    if (b.rfind("\xff\xd9") == std::string::npos) return "a JPEG without its end-of-image marker";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 cv::Mat ReadImage(const std::filesystem::path& path) {
@@ -109,6 +123,9 @@ cv::Mat ReadImage(const std::filesystem::path& path) {
       size && std::uint64_t{size->first} * std::uint64_t{size->second} > kMaxImagePixels) {
     throw FileError(name, 0, "declares " + std::to_string(size->first) + " x " + std::to_string(size->second) +
                                  " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
+  }
+  if (const auto truncated = TruncationOf(bytes)) {
+    throw FileError(name, 0, "is " + *truncated + " (cut short?); expected a whole image");
   }
   cv::Mat image;
   try {
@@ -218,7 +235,7 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
     return node;
   };
   try {
-    const YAML::Node doc = YAML::Load(text);
+    const YAML::Node doc = LoadYamlWithoutAliases(text, name);
     if (!doc.IsMap()) throw FileError(name, 0, "expected a catgraph vocabulary (a YAML mapping)");
     const int version = doc["format_version"] ? at(doc["format_version"]).as<int>() : 0;
     if (version != kFormatVersion) {

@@ -36,7 +36,7 @@ Pose2 Perturb(const Pose2& exact, double sigma_m, double sigma_rad, std::mt19937
 }  // namespace
 
 void Validate(const ManhattanWorldOptions& o) {
-  Require(o.num_poses >= 2, "num_poses", o.num_poses);
+  Require(o.num_poses >= 2 && o.num_poses <= kMaxManhattanPoses, "num_poses", o.num_poses);
   Require(o.grid_step_m > 0.0, "grid_step_m", o.grid_step_m);
   Require(o.grid_cells >= 2, "grid_cells", o.grid_cells);
   Require(o.turn_probability >= 0.0 && o.turn_probability <= 1.0, "turn_probability",

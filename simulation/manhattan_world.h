@@ -16,6 +16,10 @@
 
 namespace catgraph {
 
+// The most poses a generated world has: its closures grow with the square of
+// the poses on a fixed grid, and 50,000 poses take 3.2 GB (BENCHMARKS.md).
+inline constexpr int kMaxManhattanPoses = 50'000;
+
 struct ManhattanWorldOptions {
   int num_poses = 500;                      // >= 2
   double grid_step_m = 1.0;                 // distance between grid points; > 0

@@ -117,7 +117,7 @@ SimulationSummary SimulateDataset(const Scenario& scenario, const std::filesyste
   const int threads = options.threads > 0
                           ? options.threads
                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::vector<std::thread> pool;
+  std::vector<std::jthread> pool;  // joined on the way out should starting one fail
   for (int i = 0; i < threads; ++i) pool.emplace_back(work);
   std::size_t reported = 0;
   while (true) {

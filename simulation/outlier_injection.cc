@@ -121,8 +121,9 @@ std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text) {
 int GroupSize(const OutlierOptions& options) {
   const bool single =
       options.policy == OutlierPolicy::kRandom || options.policy == OutlierPolicy::kLocal;
-  if (options.group_size < 0) {
-    throw std::invalid_argument("OutlierOptions::group_size must be >= 0, got " +
+  if (options.group_size < 0 || options.group_size > kMaxOutlierGroupSize) {
+    throw std::invalid_argument("OutlierOptions::group_size must be in [0, " +
+                                std::to_string(kMaxOutlierGroupSize) + "], got " +
                                 std::to_string(options.group_size));
   }
   if (options.group_size == 0) return single ? 1 : 5;
@@ -141,8 +142,8 @@ int GroupSize(const OutlierOptions& options) {
 }
 
 void Validate(const OutlierOptions& options) {
-  if (options.count < 0) {
-    throw std::invalid_argument("OutlierOptions::count must be >= 0, got " +
+  if (options.count < 0 || options.count > kMaxOutliers) {
+    throw std::invalid_argument("OutlierOptions::count must be in [0, " + std::to_string(kMaxOutliers) + "], got " +
                                 std::to_string(options.count));
   }
   if (options.local_window < 2) {

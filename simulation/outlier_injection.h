@@ -48,6 +48,11 @@ enum class OutlierPolicy {
 std::string_view ToString(OutlierPolicy policy);
 std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text);
 
+// The most false edges one injection adds, and the largest group: 100 times
+// the published protocols' 1,000 (Vertigo, Latif), well within memory.
+inline constexpr int kMaxOutliers = 100'000;
+inline constexpr int kMaxOutlierGroupSize = 1'000;
+
 struct OutlierOptions {
   OutlierPolicy policy = OutlierPolicy::kRandom;
   int count = 0;            // false edges to add; >= 0

@@ -12,6 +12,7 @@
 
 #include "backend/io/file_error.h"
 #include "backend/io/internal/text_line.h"
+#include "backend/io/yaml_text.h"
 
 namespace catgraph {
 namespace {
@@ -138,11 +139,7 @@ class MapReader {
 };
 
 YAML::Node LoadYaml(std::string_view text, const std::string& source) {
-  try {
-    return YAML::Load(std::string(text));
-  } catch (const YAML::Exception& e) {
-    throw FileError(source, e.mark.is_null() ? 0 : e.mark.line + 1, "expected YAML: " + e.msg);
-  }
+  return LoadYamlWithoutAliases(std::string(text), source);
 }
 
 FloorPlan ParseWorld(const YAML::Node& node, const std::string& source) {

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <istream>
+#include <map>
 #include <ostream>
 
 #include "backend/io/atomic_file.h"
@@ -24,8 +25,9 @@ std::vector<std::string_view> SplitCsv(std::string_view text) {
 
 }  // namespace
 
-std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string& name) {
+std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string& name, std::vector<int>* lines) {
   std::vector<ClosureLabel> labels;
+  std::map<ClosureId, int> line_of;  // for repeated ids
   std::string text;
   int number = 0;
   constexpr std::int64_t kMaxId = std::int64_t{1} << 40;
@@ -59,16 +61,22 @@ std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string&
     label.kind = *kind;
     if (!line.token(5).empty()) label.group = static_cast<int>(line.Id(5, "group", 1 << 30));
     if (!line.token(6).empty()) label.parent = ClosureId(line.Id(6, "parent", kMaxId));
+    if (const auto [at, fresh] = line_of.emplace(label.id, number); !fresh) {
+      line.Fail("closure_id " + std::to_string(label.id.value()) + " is labelled again (first on line " +
+                std::to_string(at->second) + "); expected one row per closure");
+    }
     labels.push_back(label);
+    if (lines) lines->push_back(number);
   }
   if (in.bad()) throw FileError(name, number, "read error");
   if (number == 0) throw FileError(name, 0, "the file is empty; expected closure labels");
+  if (labels.empty()) throw FileError(name, 0, "holds the header alone; expected a row per loop closure");
   return labels;
 }
 
-std::vector<ClosureLabel> ReadClosureLabelsFile(const std::filesystem::path& path) {
+std::vector<ClosureLabel> ReadClosureLabelsFile(const std::filesystem::path& path, std::vector<int>* lines) {
   std::ifstream in = OpenForReading(path, "a closure-labels CSV file");
-  return ReadClosureLabels(in, path.string());
+  return ReadClosureLabels(in, path.string(), lines);
 }
 
 void WriteClosureLabels(const std::vector<ClosureLabel>& labels, std::ostream& out) {

@@ -23,8 +23,11 @@ namespace catgraph {
 
 inline constexpr char kClosureLabelsHeader[] = "closure_id,from,to,outlier,kind,group,parent";
 
-std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string& name);
-std::vector<ClosureLabel> ReadClosureLabelsFile(const std::filesystem::path& path);
+// A file with no label (the header alone) and a closure id given twice are
+// errors. `lines`, when given, receives each label's line number.
+std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string& name,
+                                            std::vector<int>* lines = nullptr);
+std::vector<ClosureLabel> ReadClosureLabelsFile(const std::filesystem::path& path, std::vector<int>* lines = nullptr);
 void WriteClosureLabels(const std::vector<ClosureLabel>& labels, std::ostream& out);
 void WriteClosureLabelsFile(const std::vector<ClosureLabel>& labels,
                             const std::filesystem::path& path);

@@ -61,14 +61,22 @@ void ReadCsv(const std::filesystem::path& path, const std::vector<std::string>& 
     const std::vector<std::string_view> fields = SplitCsv(text);
     if (header) {
       header = false;
-      bool ok = fields.size() >= columns.size() && fields.size() <= columns.size() + optional.size();
-      for (std::size_t i = 0; ok && i < fields.size(); ++i) {
-        const std::string& want = i < columns.size() ? columns[i] : optional[i - columns.size()];
-        ok = fields[i] == want;
+      // On a mismatch only the first wrong column is quoted (shortened), not
+      // the line: the file may be anything.
+      std::string found;
+      for (std::size_t i = 0; found.empty() && i < fields.size(); ++i) {
+        const bool known = i < columns.size() + optional.size();
+        if (!known || fields[i] != (i < columns.size() ? columns[i] : optional[i - columns.size()])) {
+          const std::string_view token = fields[i].substr(0, 64);
+          found = "column " + std::to_string(i + 1) + " is '" + std::string(token) +
+                  (token.size() < fields[i].size() ? "...'" : "'");
+        }
       }
-      if (!ok) {
-        throw FileError(name, number,
-                        "expected the header '" + expected_header + "', found '" + text + "'");
+      if (found.empty() && fields.size() < columns.size()) {
+        found = "found " + std::to_string(fields.size()) + " of its " + std::to_string(columns.size()) + " columns";
+      }
+      if (!found.empty()) {
+        throw FileError(name, number, "expected the header '" + expected_header + "'; " + found);
       }
       width = fields.size();
       continue;
@@ -102,8 +110,23 @@ std::vector<TimedPose2> ReadPoses(const std::filesystem::path& path) {
   return poses;
 }
 
+// Whether `path`, every symbolic link followed, lies inside `root` (itself
+// canonical): a dataset reads nothing outside its folder.
+bool ResolvesInside(const std::filesystem::path& root, const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, ec);
+  if (ec) return false;
+  auto r = root.begin();
+  for (auto p = resolved.begin(); r != root.end(); ++r, ++p) {
+    if (p == resolved.end() || *p != *r) return false;
+  }
+  return true;
+}
+
 std::vector<DatasetFrame> ReadFrames(const std::filesystem::path& root) {
   const std::filesystem::path path = root / "frames.csv";
+  std::error_code canonical_error;
+  const std::filesystem::path canonical_root = std::filesystem::canonical(root, canonical_error);
   std::vector<DatasetFrame> frames;
   ReadCsv(path, {"timestamp", "image", "traversal", "changed"}, {"changed_fraction"},
           [&](const Line& line) {
@@ -122,9 +145,17 @@ std::vector<DatasetFrame> ReadFrames(const std::filesystem::path& root) {
                         "': expected a path relative to the dataset folder, inside it");
             }
             std::error_code ec;
-            if (!std::filesystem::is_regular_file(root / image, ec)) {
+            const std::filesystem::file_status status = std::filesystem::status(root / image, ec);
+            if (!std::filesystem::exists(status)) {
               line.Fail("image '" + f.image + "' does not exist (expected " +
                         (root / image).string() + ")");
+            }
+            if (!std::filesystem::is_regular_file(status)) {
+              line.Fail("image '" + f.image + "' is not a regular file (a folder, FIFO or device)");
+            }
+            if (!ResolvesInside(canonical_root, root / image)) {
+              line.Fail("image '" + f.image + "' is a symbolic link (or lies below one) that leads out of the "
+                        "dataset folder; expected every file inside it");
             }
             const double traversal = line.Number(2, "traversal");
             if (traversal < 1 || traversal > 1e6 || traversal != std::floor(traversal)) {
@@ -307,6 +338,14 @@ Dataset ReadDataset(const std::filesystem::path& root) {
                     std::filesystem::exists(root, ec)
                         ? "is not a directory; expected a dataset folder (docs/dataset-format.md)"
                         : "no such directory; expected a dataset folder (docs/dataset-format.md)");
+  }
+  const std::filesystem::path canonical_root = std::filesystem::canonical(root, ec);
+  for (const char* table : {"frames.csv", "odometry.csv", "groundtruth.csv", "meta.json"}) {
+    if (std::filesystem::exists(std::filesystem::symlink_status(root / table, ec)) &&
+        !ResolvesInside(canonical_root, root / table)) {
+      throw FileError((root / table).string(), 0,
+                      "is a symbolic link that leads out of the dataset folder; expected every file inside it");
+    }
   }
   Dataset d;
   d.root = root;

@@ -11,6 +11,25 @@
 
 namespace catgraph {
 
+// `text` with control bytes (ESC, BEL, a newline a file name or token may
+// carry) written as \xNN, so that a message is one harmless line.
+inline std::string PrintableText(const std::string& text) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) {
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 0xf];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 class FileError : public std::runtime_error {
  public:
   // line == 0: the problem concerns the whole file (missing, unreadable,
@@ -25,9 +44,9 @@ class FileError : public std::runtime_error {
 
  private:
   static std::string Format(const std::string& file, int line, const std::string& message) {
-    return line > 0 ? file + ":" + std::to_string(line) + ": " + message
-                    : file + ": " + message;
+    return PrintableText(line > 0 ? file + ":" + std::to_string(line) + ": " + message : file + ": " + message);
   }
+
 
   std::string file_;
   int line_ = 0;

@@ -117,6 +117,10 @@ Eigen::Quaterniond Quaternion(const Line& line, std::size_t first) {
   const Eigen::Quaterniond q(line.Number(first + 3, "qw"), line.Number(first, "qx"),
                              line.Number(first + 1, "qy"), line.Number(first + 2, "qz"));
   if (q.norm() < 1e-9) line.Fail(std::string(line.tag()) + ": expected a non-zero quaternion");
+  // Components so large that the norm overflows would normalise to NaN.
+  if (!std::isfinite(q.squaredNorm())) {
+    line.Fail(std::string(line.tag()) + ": the quaternion's norm overflows; expected components of a unit quaternion");
+  }
   return q;
 }
 

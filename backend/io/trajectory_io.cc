@@ -3,6 +3,7 @@
 #include <cctype>
 #include <fstream>
 #include <istream>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <vector>
@@ -87,13 +88,23 @@ Trajectory2 ParsePoses(const std::vector<NumberedLine>& lines, const std::string
 Trajectory3 ParseTum(const std::vector<NumberedLine>& lines, const std::string& name) {
   Trajectory3 trajectory;
   std::int64_t row = 0;
+  double previous_time = -std::numeric_limits<double>::infinity();
+  int previous_line = 0;
   for (const NumberedLine& l : lines) {
     const Line line(name, l.number, Tokenize(l.text), "TUM pose");
     if (line.size() != 8) {
       line.Fail("found " + std::to_string(line.size()) +
                 " values; expected 8 (timestamp x y z qx qy qz qw)");
     }
-    line.Number(0, "timestamp");
+    // Poses pair with another trajectory's by order: a repeated or
+    // misplaced row would shift every pose after it.
+    const double time = line.Number(0, "timestamp");
+    if (!(time > previous_time)) {
+      line.Fail("timestamp " + std::string(line.token(0)) + " is not after line " + std::to_string(previous_line) +
+                "'s; expected strictly increasing timestamps");
+    }
+    previous_time = time;
+    previous_line = l.number;
     const Eigen::Vector3d t(line.Number(1, "x"), line.Number(2, "y"), line.Number(3, "z"));
     const Eigen::Quaterniond q(line.Number(7, "qw"), line.Number(4, "qx"), line.Number(5, "qy"),
                                line.Number(6, "qz"));

@@ -114,7 +114,7 @@ TEST_CASE("catgraph generate-graph writes a graph that info reads back", "[apps]
   CHECK(j.at("vertices") == 200);
   CHECK(j.at("odometry_edges") == 199);
   CHECK(j.at("connected") == true);
-  CHECK(Run({"generate-graph", "-o", graph, "--poses", "1"}).status == 1);
+  CHECK(Run({"generate-graph", "-o", graph, "--poses", "1"}).status == 2);  // out of range: a bad command line
   std::filesystem::remove_all(dir);
 }
 
@@ -273,10 +273,34 @@ TEST_CASE("evaluate names the file at fault", "[apps][evaluate][bad-input]") {
   std::ofstream(dir / "short.txt") << "0 0 0\n1 0 0\n";
   const Result r = Run({"evaluate", graph, "--truth", (dir / "short.txt").string()});
   CHECK(r.status == 1);
-  CHECK(r.err.find("pose 2 of the estimate has no ground truth") != std::string::npos);
+  CHECK(r.err.find("short.txt: pose 2 of the estimate has no ground truth") != std::string::npos);
   const Result missing = Run({"evaluate", graph, "--truth", (dir / "nope.txt").string()});
   CHECK(missing.status == 1);
   CHECK(missing.err.find("nope.txt: no such file") != std::string::npos);
+
+  // Labels that do not belong to the estimate are errors naming the line,
+  // never a precision over the wrong closures.
+  const std::string truth = (dir / "truth.g2o").string(), spoiled = (dir / "spoiled.g2o").string();
+  const std::string labels = (dir / "labels.csv").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--truth", truth, "--poses", "200"}).status == 0);
+  REQUIRE(Run({"inject", graph, "-o", spoiled, "--outliers", "5", "--labels", labels}).status == 0);
+  const std::string good = testing::ReadText(labels);
+  REQUIRE(Run({"evaluate", spoiled, "--truth", truth, "--labels", labels}).status == 0);
+  const std::string header = good.substr(0, good.find('\n') + 1);
+  const std::string first_row = good.substr(header.size(), good.find('\n', header.size()) + 1 - header.size());
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {header, "labels.csv: holds the header alone"},
+      {header + good.substr(header.size() + first_row.size()), "labels.csv: has no label for the estimate's closure"},
+      {good + "999999," + first_row.substr(first_row.find(',') + 1), "is labelled more often than the estimate has it"},
+      {good + "999999,4294967295,3,1,injected,,\n", "pose 4294967295 is not in the estimate"},
+  };
+  for (const auto& [text, message] : bad) {
+    std::ofstream(labels) << text;
+    const Result e = Run({"evaluate", spoiled, "--truth", truth, "--labels", labels});
+    CAPTURE(message, e.err);
+    CHECK(e.status == 1);
+    CHECK(e.err.find(message) != std::string::npos);
+  }
   std::filesystem::remove_all(dir);
 }
 
@@ -322,6 +346,28 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
                          "--total-path-retries", "100", "--observation", "holistic", "--new-place-offset", "-3"});
   CHECK(ok.status != 0);
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
+}
+
+// Sizes from flags have documented maxima, checked before anything is
+// allocated: the flag is named, nothing aborts.
+TEST_CASE("sizes beyond their documented maximum are refused by flag name", "[apps][bad-input][bounds]") {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad = {
+      {{"inject", "g.g2o", "-o", "x.g2o", "--outliers", "2147483647"}, "--outliers"},
+      {{"inject", "g.g2o", "-o", "x.g2o", "--outliers", "-1"}, "--outliers"},
+      {{"inject", "g.g2o", "-o", "x.g2o", "--outliers", "10", "--group-size", "1000000"}, "--group-size"},
+      {{"generate-graph", "-o", "x.g2o", "--poses", "100000"}, "--poses"},
+      {{"simulate", "--scenario", "office-change", "-o", "x", "--threads", "2000"}, "--threads"},
+      {{"localize", "d", "-o", "x", "--threads", "2000"}, "--threads"},
+      {{"map", "d", "-o", "x", "--threads", "-1"}, "--threads"},
+      {{"sweep", "--config", "s.yaml", "--jobs", "100000"}, "--jobs"},
+  };
+  for (const auto& [args, flag] : bad) {
+    const Result r = Run(args);
+    CAPTURE(args, r.err);
+    CHECK(r.status == 2);
+    CHECK(r.err.find(flag) != std::string::npos);
+    CHECK(r.err.find("::") == std::string::npos);  // no C++ name
+  }
 }
 
 TEST_CASE("localize holds after a closure by default; --no-hold-after-closure turns it off, --hold-after-closure "

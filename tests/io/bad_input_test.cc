@@ -1,5 +1,7 @@
 // Every kind of bad input gives one FileError naming the file, the line and
 // what was expected.
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -142,6 +144,34 @@ TEST_CASE("a missing file and a directory give a one-line error without a line n
   } catch (const FileError& e) {
     CHECK(std::string(e.what()).find("is a directory") != std::string::npos);
   }
+}
+
+TEST_CASE("a quaternion whose norm overflows is refused, not normalised to NaN", "[io][bad-input]") {
+  CheckError("VERTEX_SE3:QUAT 0 0 0 0 1e300 1e300 0 1\n", "bad.g2o:1:",
+             "VERTEX_SE3:QUAT: the quaternion's norm overflows");
+}
+
+TEST_CASE("a FIFO is refused at once, not waited on", "[io][bad-input]") {
+  const auto dir = testing::TempDir("bad_input_fifo");
+  const std::filesystem::path fifo = dir / "graph.g2o";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  try {
+    ReadGraphFile(fifo);  // would block forever in open(2) without a writer
+    FAIL("expected a FileError");
+  } catch (const FileError& e) {
+    CHECK(std::string(e.what()) == fifo.string() + ": is not a regular file (a FIFO, device or socket); expected a "
+                                                   "pose-graph file (g2o, TORO or iSAM)");
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("control bytes of the input are escaped: the message stays one harmless line", "[io][bad-input]") {
+  const std::string message = ErrorOf("VERTEX_SE2 0 0 0 0\nVERTEX_\x1b[31mX\x07 1 0 0 0\n");
+  INFO(message);
+  CHECK(message.find('\x1b') == std::string::npos);
+  CHECK(message.find('\x07') == std::string::npos);
+  CHECK(message.find("VERTEX_\\x1b[31mX\\x07") != std::string::npos);
+  CHECK(FileError("a\nb", 2, "c\rd").what() == std::string("a\\x0ab:2: c\\x0dd"));
 }
 
 }  // namespace

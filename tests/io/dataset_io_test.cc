@@ -1,5 +1,7 @@
 // The dataset format: a written dataset reads back, and every inconsistency
 // is a FileError naming the file and the line.
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -88,6 +90,38 @@ TEST_CASE("inconsistent datasets are errors naming the file and the line", "[io]
   Replace(root / "odometry.csv", "\n1.000000,", "\n0.600000,");
   CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:4: frame timestamp 0.750000 lies outside the time range [0.000000, 0.600000] of odometry.csv"));
 
+  // Files that lead out of the folder through a symbolic link, and files that
+  // are no regular files, are refused by name.
+  fresh();
+  const auto outside = testing::TempDir("dataset_outside");
+  std::filesystem::copy_file(root / "images/000001.png", outside / "x.png");
+  std::filesystem::remove(root / "images/000001.png");
+  std::filesystem::create_symlink(outside / "x.png", root / "images/000001.png");
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:3: image 'images/000001.png' is a symbolic link (or lies "
+                                                 "below one) that leads out of the dataset folder"));
+  fresh();
+  std::filesystem::rename(root / "images", outside / "images");
+  std::filesystem::create_directory_symlink(outside / "images", root / "images");
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:2: image 'images/000000.png' is a symbolic link"));
+  fresh();
+  std::filesystem::rename(root / "odometry.csv", outside / "odometry.csv");
+  std::filesystem::create_symlink(outside / "odometry.csv", root / "odometry.csv");
+  CHECK_THAT(ErrorReading(root), Catch::Contains("odometry.csv: is a symbolic link that leads out of the dataset folder"));
+  fresh();
+  std::filesystem::remove(root / "images/000001.png");
+  REQUIRE(::mkfifo((root / "images/000001.png").c_str(), 0600) == 0);
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:3: image 'images/000001.png' is not a regular file"));
+  fresh();
+  std::filesystem::remove(root / "frames.csv");
+  REQUIRE(::mkfifo((root / "frames.csv").c_str(), 0600) == 0);
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv: is not a regular file (a FIFO, device or socket)"));
+  std::filesystem::remove_all(outside);
+  // A link that stays inside the folder is followed.
+  fresh();
+  std::filesystem::rename(root / "images/000001.png", root / "images/real.png");
+  std::filesystem::create_symlink("real.png", root / "images/000001.png");
+  CHECK(ReadDataset(root).frames.size() == 3);
+
   // Ground truth that ends before the last frame: an input error, not an
   // interpolation failure deep inside a command.
   fresh();
@@ -100,7 +134,12 @@ TEST_CASE("inconsistent datasets are errors naming the file and the line", "[io]
 
   fresh();
   Replace(root / "frames.csv", "timestamp,image", "time,image");
-  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:1: expected the header 'timestamp,image,traversal,changed[,changed_fraction]'"));
+  CHECK_THAT(ErrorReading(root), Catch::Contains("frames.csv:1: expected the header 'timestamp,image,traversal,changed[,changed_fraction]'; column 1 is 'time'"));
+  // A foreign file's first line is not echoed beyond its first wrong column.
+  fresh();
+  Replace(root / "odometry.csv", "timestamp,x,y,theta", "timestamp,x,secret " + std::string(200, 's') + ",theta");
+  const std::string foreign = ErrorReading(root);
+  CHECK_THAT(foreign, Catch::EndsWith("; column 3 is 'secret " + std::string(57, 's') + "...'"));
 
   fresh();
   Replace(root / "groundtruth.csv", "1.000000,2.000000", "1.000000,abc");

@@ -6,14 +6,17 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/catch.h"
+#include <opencv2/imgcodecs.hpp>
 
 #include "apps/sweep.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
 #include "frontend/vocabulary.h"
+#include "simulation/scenario.h"
 #include "tests/test_support.h"
 
 namespace catgraph {
@@ -36,10 +39,21 @@ TEST_CASE("an image header declaring 100 000 x 100 000 pixels is refused before 
       << std::string("\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08", 13) << std::string("\xEA\x60", 2)
       << std::string("\xC3\x50", 2) << std::string("\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 10);
   CHECK_THROWS_WITH(ReadImage(dir / "huge.jpg"), Catch::Contains("huge.jpg: declares 50000 x 60000 pixels"));
-  // A header that is fine but data that is not: OpenCV's verdict, as FileError.
+  // A header that is fine but a file cut short: refused before the decoder
+  // (which would print its own line to stderr) sees it.
   std::ofstream(dir / "cut.png", std::ios::binary)
       << std::string("\x89PNG\r\n\x1a\n", 8) << BigEndian32(13) << "IHDR" << BigEndian32(10) << BigEndian32(10);
-  CHECK_THROWS_WITH(ReadImage(dir / "cut.png"), Catch::Contains("cut.png: cannot decode the image"));
+  CHECK_THROWS_WITH(ReadImage(dir / "cut.png"), Catch::Contains("cut.png: is a PNG without its end (IEND) chunk"));
+  std::vector<std::uint8_t> png, jpeg;
+  const cv::Mat3b picture(40, 60, cv::Vec3b(10, 200, 30));
+  cv::imencode(".png", picture, png);
+  cv::imencode(".jpg", picture, jpeg);
+  std::ofstream(dir / "half.png", std::ios::binary).write(reinterpret_cast<const char*>(png.data()), png.size() / 2);
+  std::ofstream(dir / "half.jpg", std::ios::binary).write(reinterpret_cast<const char*>(jpeg.data()), jpeg.size() / 2);
+  std::ofstream(dir / "whole.jpg", std::ios::binary).write(reinterpret_cast<const char*>(jpeg.data()), jpeg.size());
+  CHECK_THROWS_WITH(ReadImage(dir / "half.png"), Catch::Contains("half.png: is a PNG without its end"));
+  CHECK_THROWS_WITH(ReadImage(dir / "half.jpg"), Catch::Contains("half.jpg: is a JPEG without its end-of-image marker"));
+  CHECK(ReadImage(dir / "whole.jpg").size() == cv::Size(60, 40));
   std::filesystem::remove_all(dir);
 }
 
@@ -69,6 +83,29 @@ TEST_CASE("a sweep configuration larger than 1 MB is refused", "[io][bad-input][
   const auto dir = testing::TempDir("bounds_sweep");
   std::ofstream(dir / "sweep.yaml") << "# " << std::string(2 << 20, 'x') << "\noutput: runs.csv\n";
   CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "sweep.yaml"), Catch::Contains("expected at most 1048576"));
+  std::filesystem::remove_all(dir);
+}
+
+// "Billion laughs": nine levels of ten aliases stand for 10^9 strings in a
+// few hundred bytes. Refused at the first alias, before any expansion, in
+// every YAML catgraph reads.
+TEST_CASE("YAML aliases are refused before they are expanded", "[io][bad-input][bounds]") {
+  const auto dir = testing::TempDir("bounds_yaml");
+  std::ostringstream text;  // (a stream: GCC 12 warns falsely on string sums here)
+  text << "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n";
+  for (int level = 1; level < 10; ++level) {
+    text << 'a' << level << ": &a" << level << " [*a" << level - 1;
+    for (int k = 1; k < 10; ++k) text << ", *a" << level - 1;
+    text << "]\n";
+  }
+  const std::string bomb = text.str();
+  std::ofstream(dir / "sweep.yaml") << "output: runs.csv\n" << bomb;
+  CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "sweep.yaml"),
+                    Catch::Contains("sweep.yaml:3: a YAML alias (*name); expected plain values"));
+  std::ofstream(dir / "scenario.yaml") << "name: bomb\n" << bomb;
+  CHECK_THROWS_WITH(LoadScenario((dir / "scenario.yaml").string()), Catch::Contains("scenario.yaml:3: a YAML alias"));
+  std::ofstream(dir / "vocabulary.yml") << "format_version: 1\n" << bomb;
+  CHECK_THROWS_WITH(Vocabulary::Load(dir / "vocabulary.yml"), Catch::Contains("vocabulary.yml:3: a YAML alias"));
   std::filesystem::remove_all(dir);
 }
 

@@ -72,6 +72,9 @@ TEST_CASE("bad trajectory files name the file, the line and what was expected",
         "t.txt:2: pose 0 is listed twice; expected one line per pose");
   CHECK(ErrorOf("1 0 0 0 0 0 0 2\n").starts_with("t.txt:1: the quaternion has norm 2"));
   CHECK(ErrorOf("# nothing\n") == "t.txt:1: no pose in the file");
+  // A repeated TUM row would pair every later pose with the wrong truth.
+  CHECK(ErrorOf("1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n") ==
+        "t.txt:3: timestamp 2.0 is not after line 2's; expected strictly increasing timestamps");
   // Asked for poses, a first line of 2 or 5 values (found by fuzzing: the
   // column count was trusted and indexed past the line).
   CHECK(ErrorOf("1 2\n3 4\n", TrajectoryFormat::kPoses) ==
@@ -111,6 +114,10 @@ TEST_CASE("closure labels round-trip and reject foreign files", "[io][labels]") 
             .starts_with("l.csv:2: unknown closure kind 'magic'"));
   CHECK(error(std::string(kClosureLabelsHeader) + "\n1,2,3,2,visual,0,\n")
             .starts_with("l.csv:2: closure label: expected a non-negative integer id for outlier"));
+  // Silent garbage before: a header alone scored 0 closures as precision 1.
+  CHECK(error(std::string(kClosureLabelsHeader) + "\n") == "l.csv: holds the header alone; expected a row per loop closure");
+  CHECK(error(std::string(kClosureLabelsHeader) + "\n1,2,3,1,visual,0,\n\n1,5,9,0,visual,,\n") ==
+        "l.csv:4: closure_id 1 is labelled again (first on line 2); expected one row per closure");
 }
 
 TEST_CASE("the JSON export holds every vertex, constraint and decision", "[io][export]") {

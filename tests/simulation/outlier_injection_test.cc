@@ -259,7 +259,9 @@ TEST_CASE("injection rejects bad options with the offending value", "[simulation
   o.group_size = 1;
   CHECK_THROWS_WITH(InjectOutliers(g, o), Catch::Contains("group size >= 2"));
   o = Options(OutlierPolicy::kLocal, -1);
-  CHECK_THROWS_WITH(InjectOutliers(g, o), Catch::Contains("count must be >= 0"));
+  CHECK_THROWS_WITH(InjectOutliers(g, o), Catch::Contains("count must be in [0, 100000], got -1"));
+  o = Options(OutlierPolicy::kLocal, kMaxOutliers + 1);
+  CHECK_THROWS_WITH(InjectOutliers(g, o), Catch::Contains("count must be in [0, 100000], got 100001"));
   o = Options(OutlierPolicy::kRandomGrouped, 5);
   o.group_size = 48;
   CHECK_THROWS_WITH(InjectOutliers(g, o), Catch::Contains("needs at least 51 poses"));

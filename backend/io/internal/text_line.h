@@ -165,8 +165,13 @@ inline bool ReadBoundedLine(std::istream& in, std::string& text, std::size_t max
 inline std::ifstream OpenForReading(const std::filesystem::path& path, std::string_view expected) {
   const std::string name = path.string();
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(status)) {
     throw FileError(name, 0, "is a directory; expected " + std::string(expected));
+  }
+  // Opening a FIFO would wait for a writer forever; a device never ends.
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    throw FileError(name, 0, "is not a regular file (a FIFO, device or socket); expected " + std::string(expected));
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
