@@ -23,8 +23,7 @@ void RunExport(const ExportOptions& o, std::ostream& out) {
   RefuseOutputClashes({o.output}, {o.input});
   std::string format = o.format;
   if (format.empty()) {
-    format = std::filesystem::path(o.output).extension().string();
-    if (!format.empty()) format.erase(0, 1);
+    format = plot::LowerCaseExtension(o.output);
     if (format != "tum" && format != "json" && format != "dot" && format != "svg" &&
         format != "png" && format != "g2o") {
       throw std::invalid_argument("cannot tell the export format from '" + o.output +
@@ -40,7 +39,7 @@ void RunExport(const ExportOptions& o, std::ostream& out) {
     if (format == "dot") WriteGraphDotFile(graph, o.output);
     if (format == "g2o") WriteG2oFile(graph, o.output);
     if (format == "svg" || format == "png") {
-      if (std::filesystem::path(o.output).extension() != "." + format) {
+      if (plot::LowerCaseExtension(o.output) != format) {
         throw std::invalid_argument("--format " + format + " needs an output file ending in ." +
                                     format);
       }

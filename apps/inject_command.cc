@@ -1,4 +1,5 @@
 // catgraph inject IN -o OUT --outliers N [--policy P] [--group-size G] ...
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
@@ -21,6 +22,7 @@ struct InjectOptions {
   bool switchable = false;
   double switch_prior_information = 1.0;
   OutlierOptions outliers;
+  int groups = -1;  // --groups; -1: --outliers gives the total
 };
 
 // One value: that value times the identity; otherwise g2o's upper triangle.
@@ -48,6 +50,16 @@ void RunInject(InjectOptions o, std::ostream& out) {
   AnyPoseGraph graph = ReadGraphFile(o.input, read_options).graph;
   const int dim = std::holds_alternative<PoseGraph2>(graph) ? 3 : 6;
   o.outliers.policy = *OutlierPolicyFromString(o.policy);
+  if (o.groups >= 0) {
+    // Vertigo's generateDataset.py: N groups of G edges each.
+    const std::int64_t total = std::int64_t{o.groups} * GroupSize(o.outliers);
+    if (total > kMaxOutliers) {
+      throw std::invalid_argument("--groups " + std::to_string(o.groups) + " x group size " +
+                                  std::to_string(GroupSize(o.outliers)) + " is " + std::to_string(total) +
+                                  " false edges; expected at most " + std::to_string(kMaxOutliers));
+    }
+    o.outliers.count = static_cast<int>(total);
+  }
   if (!o.information.empty()) o.outliers.information = InformationFromValues(o.information, dim);
   const std::vector<InjectedClosure> injected = InjectOutliers(graph, o.outliers);
   if (o.switchable) {
@@ -84,9 +96,14 @@ void AddInjectCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("input", o->input, "Pose-graph file (g2o, TORO, iSAM)")->required();
   cmd->add_option("-o,--output", o->output, "Spoiled graph (g2o)")->required();
   AddGraphFormatOption(*cmd, o->format);
-  cmd->add_option("--outliers", o->outliers.count, "Number of false edges")
-      ->check(CLI::Range(0, kMaxOutliers))
-      ->required();
+  CLI::Option* outliers = cmd->add_option("--outliers", o->outliers.count, "Number of false edges in all")
+                              ->check(CLI::Range(0, kMaxOutliers));
+  CLI::Option* groups =
+      cmd->add_option("--groups", o->groups,
+                      "Number of groups of --group-size edges each (N x G edges, Vertigo's convention); instead of "
+                      "--outliers")
+          ->check(CLI::Range(0, kMaxOutliers));
+  outliers->excludes(groups);
   cmd->add_option("--policy", o->policy,
                   "random, local (pairs at most --local-window apart), random-grouped, "
                   "local-grouped, or hierarchical (a false visual closure and its "
@@ -115,7 +132,10 @@ void AddInjectCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_option("--labels", o->labels,
                   "Write a CSV with every loop closure and whether it is false");
-  cmd->callback([o, &out] { RunInject(*o, out); });
+  cmd->callback([o, outliers, groups, &out] {
+    if (outliers->count() == 0 && groups->count() == 0) throw CLI::RequiredError("--outliers (in all) or --groups");
+    RunInject(*o, out);
+  });
 }
 
 }  // namespace catgraph

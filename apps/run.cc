@@ -1,5 +1,9 @@
+#include <algorithm>
 #include <exception>
+#include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "apps/commands.h"
 #include "backend/io/file_error.h"
@@ -11,6 +15,57 @@ void AddGraphFormatOption(CLI::App& command, std::string& format) {
       ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
       ->capture_default_str();
 }
+
+namespace {
+
+// Levenshtein distance, for suggestions.
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// The name nearest to `typed`, when it is within a third of its length
+// (at least one edit): "optimze" -> "optimize", "--particels" -> "--particles".
+std::optional<std::string> Nearest(const std::string& typed, const std::vector<std::string>& names) {
+  std::optional<std::string> best;
+  std::size_t best_distance = std::max<std::size_t>(1, typed.size() / 3) + 1;
+  for (const std::string& name : names) {
+    const std::size_t d = EditDistance(typed, name);
+    if (d < best_distance) best = name, best_distance = d;
+  }
+  return best;
+}
+
+// For arguments CLI11 did not expect: the command or option meant, from the
+// innermost command given.
+std::string Suggestions(const CLI::App& app) {
+  const CLI::App* command = &app;
+  while (!command->get_subcommands().empty()) command = command->get_subcommands().front();
+  std::vector<std::string> commands, options;
+  for (const CLI::App* sub : command->get_subcommands({})) commands.push_back(sub->get_name());
+  for (const CLI::Option* option : command->get_options()) {
+    for (const std::string& name : option->get_lnames()) options.push_back("--" + name);
+  }
+  std::string text;
+  for (const std::string& extra : app.remaining(/*recurse=*/true)) {
+    const std::optional<std::string> meant =
+        Nearest(extra.substr(0, extra.find('=')), extra.starts_with("-") ? options : commands);
+    if (meant) text += (text.empty() ? " (did you mean " : ", ") + ("'" + *meant + "'");
+  }
+  return text.empty() ? text : text + "?)";
+}
+
+}  // namespace
 
 void AddOverwriteFlag(CLI::App& command, bool& overwrite) {
   command.add_flag("--overwrite", overwrite,
@@ -59,7 +114,12 @@ int RunCatgraph(int argc, const char* const* argv, std::ostream& out, std::ostre
     out << "catgraph 0.1.0\n";
     return 0;
   } catch (const CLI::ParseError& e) {
-    err << "catgraph: " << PrintableText(e.what()) << "\nRun 'catgraph --help' for the commands and options.\n";
+    // A first word that names no command: say so, rather than CLI11's "a
+    // subcommand is required".
+    const std::vector<std::string> extras = app.remaining(/*recurse=*/true);
+    const bool unknown_command = app.get_subcommands().empty() && !extras.empty() && !extras.front().starts_with("-");
+    const std::string what = unknown_command ? "unknown command '" + extras.front() + "'" : std::string(e.what());
+    err << "catgraph: " << PrintableText(what) << PrintableText(Suggestions(app)) << "\nRun 'catgraph --help' for the commands and options.\n";
     return 2;
   } catch (const FileError& e) {
     err << "catgraph: error: " << PrintableText(e.what()) << '\n';

@@ -372,7 +372,7 @@ SweepConfig ReadSweepConfigFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   // A configuration is a few hundred bytes; 1 MB bounds what a hostile one costs.
   const std::string text = ReadWholeFile(path, std::uintmax_t{1} << 20, "a sweep configuration (JSON or YAML)");
-  const std::string ext = path.extension().string();
+  const std::string ext = "." + plot::LowerCaseExtension(path);
   nlohmann::json j;
   try {
     if (ext == ".yaml" || ext == ".yml") {

@@ -1,6 +1,7 @@
 #include "apps/plot/figure.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -294,11 +295,18 @@ Color PaletteColor(int index) {
   return kPalette[((index % n) + n) % n];
 }
 
+std::string LowerCaseExtension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  if (!extension.empty()) extension.erase(0, 1);
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
 void SaveFigure(const Figure& figure, const std::filesystem::path& path) {
   const std::string name = path.string();
-  const std::string extension = path.extension().string();
-  if (extension != ".png" && extension != ".svg") {
-    throw FileError(name, 0, "unknown picture type '" + extension + "'; expected .png or .svg");
+  const std::string extension = LowerCaseExtension(path);
+  if (extension != "png" && extension != "svg") {
+    throw FileError(name, 0, "unknown picture type '" + path.extension().string() + "'; expected .png or .svg");
   }
   if (figure.rows < 1 || figure.cols < 1 || figure.width_px < 1 || figure.height_px < 1 ||
       static_cast<int>(figure.axes.size()) > figure.rows * figure.cols) {
@@ -306,7 +314,7 @@ void SaveFigure(const Figure& figure, const std::filesystem::path& path) {
   }
   std::string bytes;
   std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(
-      extension == ".svg"
+      extension == "svg"
           ? cairo_svg_surface_create_for_stream(AppendToString, &bytes, figure.width_px,
                                                 figure.height_px)
           : cairo_image_surface_create(CAIRO_FORMAT_ARGB32, figure.width_px, figure.height_px));
@@ -318,7 +326,7 @@ void SaveFigure(const Figure& figure, const std::filesystem::path& path) {
                                    cairo_status_to_string(cairo_status(cr.get())));
     }
   }
-  if (extension == ".png") {
+  if (extension == "png") {
     const cairo_status_t status =
         cairo_surface_write_to_png_stream(surface.get(), AppendToString, &bytes);
     if (status != CAIRO_STATUS_SUCCESS) {

@@ -59,6 +59,10 @@ struct Figure {
 // atomically. Throws FileError on an unknown extension or a write failure.
 void SaveFigure(const Figure& figure, const std::filesystem::path& path);
 
+// The extension of `path` without its dot, in lower case ("x.PNG" -> "png"):
+// how every command tells an output's format from its name.
+std::string LowerCaseExtension(const std::filesystem::path& path);
+
 }  // namespace catgraph::plot
 
 #endif  // CATGRAPH_APPS_PLOT_FIGURE_H_

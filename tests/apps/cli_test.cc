@@ -24,6 +24,7 @@
 #include "apps/commands.h"
 #include "apps/localization_report.h"
 #include "apps/sweep.h"
+#include "backend/io/closure_labels.h"
 #include "backend/io/dataset.h"
 #include "tests/test_support.h"
 
@@ -225,6 +226,30 @@ TEST_CASE("inject, optimize, evaluate: the experiment in three commands", "[apps
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("inject --groups N --group-size G adds N x G edges, as Vertigo's generator does", "[apps][inject]") {
+  const auto dir = testing::TempDir("cli_groups");
+  const std::string graph = (dir / "g.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "200"}).status == 0);
+  const Result groups = Run({"inject", graph, "-o", (dir / "a.g2o").string(), "--groups", "4", "--group-size", "3",
+                             "--policy", "random-grouped", "--labels", (dir / "a.csv").string()});
+  REQUIRE(groups.status == 0);
+  CHECK(groups.out.starts_with("injected 12 false loop closures (random-grouped, 4 groups"));
+  std::map<int, int> per_group;
+  for (const ClosureLabel& l : ReadClosureLabelsFile(dir / "a.csv")) {
+    if (l.outlier) ++per_group[*l.group];
+  }
+  CHECK(per_group == std::map<int, int>{{0, 3}, {1, 3}, {2, 3}, {3, 3}});
+  // The same edges as --outliers 12 with groups of 3.
+  REQUIRE(Run({"inject", graph, "-o", (dir / "b.g2o").string(), "--outliers", "12", "--group-size", "3", "--policy",
+               "random-grouped"}).status == 0);
+  CHECK(testing::ReadText(dir / "a.g2o") == testing::ReadText(dir / "b.g2o"));
+  CHECK(Run({"inject", graph, "-o", (dir / "c.g2o").string(), "--groups", "4", "--outliers", "12"}).status == 2);
+  CHECK(Run({"inject", graph, "-o", (dir / "c.g2o").string()}).status == 2);
+  CHECK(Run({"inject", graph, "-o", (dir / "c.g2o").string(), "--groups", "100000", "--group-size", "10", "--policy",
+             "random-grouped"}).status == 1);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_CASE("inject writes switchable files and hierarchical parents", "[apps][inject]") {
   const auto dir = testing::TempDir("cli_inject");
   const std::string graph = (dir / "graph.g2o").string(), out = (dir / "out.g2o").string();
@@ -263,6 +288,30 @@ TEST_CASE("export writes TUM, JSON, DOT, SVG and PNG, edges-only graphs are refu
   CHECK(edges_only.status == 1);
   CHECK(edges_only.err.find("edges_only.g2o: pose") != std::string::npos);
   CHECK(!std::filesystem::exists(dir / "e.tum"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a mistyped command or option gets a suggestion; output formats are told case-insensitively",
+          "[apps][bad-input]") {
+  const Result command = Run({"optimze", "g.g2o"});
+  CHECK(command.status == 2);
+  CHECK(command.err.starts_with("catgraph: unknown command 'optimze' (did you mean 'optimize'?)\n"));
+  const Result option = Run({"localize", "d", "-o", "x", "--particels", "30"});
+  CHECK(option.status == 2);
+  CHECK(option.err.find("--particels (did you mean '--particles'?)") != std::string::npos);
+  const Result unlike = Run({"frobnicate"});
+  CHECK(unlike.err.starts_with("catgraph: unknown command 'frobnicate'\n"));  // nothing near: no guess
+
+  const auto dir = testing::TempDir("cli_case");
+  const std::string graph = (dir / "g.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "50"}).status == 0);
+  for (const char* name : {"a.PNG", "b.Svg", "c.TUM", "d.Json"}) {
+    const Result r = Run({"export", graph, "-o", (dir / name).string()});
+    CAPTURE(name, r.err);
+    CHECK(r.status == 0);
+    CHECK(std::filesystem::file_size(dir / name) > 100);
+  }
+  CHECK(testing::ReadText(dir / "a.PNG").starts_with("\x89PNG"));
   std::filesystem::remove_all(dir);
 }
 
