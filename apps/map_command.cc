@@ -182,7 +182,12 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   out << "[3/3] outputs\n";
   WriteG2oFile(result.graph, dir / "corrected.g2o");
   WriteG2oFile(DropRejected(result.graph, result.closures), dir / "corrected_accepted.g2o");
-  WriteTumFile(AnyTrajectory(TrajectoryOf(corrected)), dir / "trajectory.tum");
+  // TUM with the frames' times, so that evo pairs the map with the truth:
+  // evo_ape tum groundtruth.tum trajectory.tum -a
+  std::map<PoseId, double> frame_times;
+  for (std::size_t i = 0; i < d.frames.size(); ++i) frame_times.emplace(PoseId(i), d.frames[i].timestamp_s);
+  WriteTumFile(AnyTrajectory(TrajectoryOf(corrected)), dir / "trajectory.tum", &frame_times);
+  if (!truth.empty()) WriteTumFile(AnyTrajectory(truth), dir / "groundtruth.tum", &frame_times);
 
   // report.json: the headline numbers, then every closure.
   std::map<ClosureId, SwitchId> switch_of;
@@ -303,7 +308,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
       << "<h2>Hypothesis and closure error per frame (Figs. 7, 8, 11)</h2>\n"
       << "<img src=\"localization.svg\" alt=\"hypothesis and closure error per frame\">\n"
       << "<p>Files: corrected.g2o (with switches), corrected_accepted.g2o (rejected closures removed), "
-      << "trajectory.tum, report.json, closures.json, hypotheses.csv, graph.g2o (the front end's graph).</p>\n"
+      << "trajectory.tum and groundtruth.tum (frame times; evo_ape tum groundtruth.tum trajectory.tum -a), "
+      << "report.json, closures.json, hypotheses.csv, graph.g2o (the front end's graph).</p>\n"
       << "</body></html>\n";
   });
 
@@ -313,7 +319,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   }
   output.Commit();
   out << "wrote " << o.front.output
-      << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum, report.json, map.png/svg, "
+      << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum" << (truth.empty() ? "" : ", groundtruth.tum")
+      << ", report.json, map.png/svg, "
          "localization.png/svg, index.html\n";
 }
 

@@ -150,15 +150,27 @@ AnyTrajectory ReadTrajectoryFile(const std::filesystem::path& path, TrajectoryFo
   return ReadTrajectory(in, path.string(), format);
 }
 
-void WriteTum(const AnyTrajectory& trajectory, std::ostream& out) {
+void WriteTum(const AnyTrajectory& trajectory, std::ostream& out, const std::map<PoseId, double>* times) {
   const Trajectory3 poses = std::visit(
       [](const auto& t) { return ConvertTrajectory<Pose3>(t); }, trajectory);
-  out << "# timestamp tx ty tz qx qy qz qw (timestamp = catgraph pose id)\n";
-  for (const auto& [id, pose] : poses) out << (LineWriter() << id << pose).str() << '\n';
+  if (!times) {
+    out << "# timestamp tx ty tz qx qy qz qw (timestamp = catgraph pose id)\n";
+    for (const auto& [id, pose] : poses) out << (LineWriter() << id << pose).str() << '\n';
+    return;
+  }
+  out << "# timestamp tx ty tz qx qy qz qw (timestamp in seconds)\n";
+  for (const auto& [id, pose] : poses) {
+    const auto time = times->find(id);
+    if (time == times->end()) {
+      throw std::invalid_argument("WriteTum: pose " + std::to_string(id.value()) + " has no timestamp");
+    }
+    out << (LineWriter() << time->second << pose).str() << '\n';
+  }
 }
 
-void WriteTumFile(const AnyTrajectory& trajectory, const std::filesystem::path& path) {
-  WriteFileAtomically(path, [&](std::ostream& out) { WriteTum(trajectory, out); });
+void WriteTumFile(const AnyTrajectory& trajectory, const std::filesystem::path& path,
+                  const std::map<PoseId, double>* times) {
+  WriteFileAtomically(path, [&](std::ostream& out) { WriteTum(trajectory, out, times); });
 }
 
 }  // namespace catgraph

@@ -13,6 +13,7 @@
 #define CATGRAPH_BACKEND_IO_TRAJECTORY_IO_H_
 
 #include <filesystem>
+#include <map>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -34,10 +35,13 @@ AnyTrajectory ReadTrajectoryFile(const std::filesystem::path& path,
 AnyTrajectory ReadTrajectory(std::istream& in, const std::string& name,
                              TrajectoryFormat format = TrajectoryFormat::kAuto);
 
-// TUM lines "id x y z qx qy qz qw" with the pose id as timestamp; a 2D
-// trajectory is written in the plane z = 0.
-void WriteTum(const AnyTrajectory& trajectory, std::ostream& out);
-void WriteTumFile(const AnyTrajectory& trajectory, const std::filesystem::path& path);
+// TUM lines "timestamp x y z qx qy qz qw" (TUM RGB-D, evo); a 2D trajectory
+// is written in the plane z = 0. The timestamp is the pose's time in seconds
+// from `times` when given (every pose must have one; evo pairs trajectories
+// by it), else the pose id; the header line says which.
+void WriteTum(const AnyTrajectory& trajectory, std::ostream& out, const std::map<PoseId, double>* times = nullptr);
+void WriteTumFile(const AnyTrajectory& trajectory, const std::filesystem::path& path,
+                  const std::map<PoseId, double>* times = nullptr);
 
 }  // namespace catgraph
 

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "tests/catch.h"
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -559,6 +561,43 @@ TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plo
   std::filesystem::remove_all(dir);
 }
 
+// A TUM file as evo reads it: '#' lines skipped, 8 numbers per line
+// (timestamp tx ty tz qx qy qz qw).
+std::vector<std::array<double, 8>> ReadTumAsEvo(const std::filesystem::path& path) {
+  std::vector<std::array<double, 8>> rows;
+  std::istringstream in(testing::ReadText(path));
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::array<double, 8> row{};
+    for (double& v : row) REQUIRE(static_cast<bool>(fields >> v));
+    std::string rest;
+    CHECK_FALSE(static_cast<bool>(fields >> rest));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// RMSE of the positions after the best rotation and translation of the
+// first onto the second (closed form in 2D; Umeyama without scale).
+double RigidAlignedRmse(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& pairs) {
+  Eigen::Vector2d mean_a = Eigen::Vector2d::Zero(), mean_b = Eigen::Vector2d::Zero();
+  for (const auto& [a, b] : pairs) mean_a += a, mean_b += b;
+  mean_a /= static_cast<double>(pairs.size());
+  mean_b /= static_cast<double>(pairs.size());
+  double cross = 0.0, dot = 0.0;
+  for (const auto& [a, b] : pairs) {
+    const Eigen::Vector2d p = a - mean_a, q = b - mean_b;
+    cross += p.x() * q.y() - p.y() * q.x();
+    dot += p.dot(q);
+  }
+  const Eigen::Rotation2Dd rotation(std::atan2(cross, dot));
+  double sum = 0.0;
+  for (const auto& [a, b] : pairs) sum += (rotation * (a - mean_a) + mean_b - b).squaredNorm();
+  return std::sqrt(sum / static_cast<double>(pairs.size()));
+}
+
 // A picture worth looking at: decodes, is large, and is not one flat colour.
 void CheckNonTrivialImage(const std::filesystem::path& path) {
   INFO(path);
@@ -775,9 +814,24 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   const double ate_corrected = report.at("ate_corrected").at("rmse_m").get<double>();
   CHECK(ate_corrected < 0.25 * ate_odometry);
   CHECK(ate_corrected < 0.25);
-  for (const char* file : {"corrected.g2o", "corrected_accepted.g2o", "trajectory.tum", "index.html", "map.svg"}) {
+  for (const char* file : {"corrected.g2o", "corrected_accepted.g2o", "trajectory.tum", "groundtruth.tum", "index.html",
+                           "map.svg"}) {
     CHECK(std::filesystem::exists(out / file));
   }
+  // evo's reading of the two TUM files: pairs by timestamp, and after a rigid
+  // alignment (evo_ape -a) the same ATE as report.json.
+  const auto estimate = ReadTumAsEvo(out / "trajectory.tum"), truth = ReadTumAsEvo(out / "groundtruth.tum");
+  REQUIRE(estimate.size() == report.at("frames").get<std::size_t>());
+  REQUIRE(truth.size() == estimate.size());
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;
+  for (std::size_t i = 0; i < estimate.size(); ++i) {
+    CHECK(estimate[i][0] == Approx(d.frames[i].timestamp_s).margin(1e-9));
+    const auto match = std::find_if(truth.begin(), truth.end(),
+                                    [&](const auto& t) { return std::abs(t[0] - estimate[i][0]) < 0.01; });
+    REQUIRE(match != truth.end());
+    pairs.emplace_back(Eigen::Vector2d(estimate[i][1], estimate[i][2]), Eigen::Vector2d((*match)[1], (*match)[2]));
+  }
+  CHECK(RigidAlignedRmse(pairs) == Approx(ate_corrected).epsilon(1e-3));
   CheckNonTrivialImage(out / "map.png");
   CheckNonTrivialImage(out / "localization.png");
 

@@ -60,6 +60,15 @@ TEST_CASE("TUM written and read back gives the same trajectory", "[io][trajector
   WriteTum(t2, out2);
   const auto planar = std::get<Trajectory3>(Read(out2.str()));
   CHECK(testing::ApproxEqual(ToPose2(planar.at(PoseId(0))), t2.at(PoseId(0)), 1e-12));
+  // With times, the timestamp column is each pose's time in seconds.
+  const std::map<PoseId, double> times{{PoseId(0), 1764936000.125}, {PoseId(1), 1764936000.25}};
+  std::ostringstream timed;
+  WriteTum(t2, timed, &times);
+  CHECK(timed.str().starts_with("# timestamp tx ty tz qx qy qz qw (timestamp in seconds)\n1764936000.125 1 2 0 "));
+  CHECK(timed.str().find("\n1764936000.25 -1 0 0 ") != std::string::npos);
+  const std::map<PoseId, double> partial{{PoseId(0), 0.5}};
+  std::ostringstream unused;
+  CHECK_THROWS_WITH(WriteTum(t2, unused, &partial), Catch::Contains("pose 1 has no timestamp"));
 }
 
 TEST_CASE("bad trajectory files name the file, the line and what was expected",
