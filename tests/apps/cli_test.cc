@@ -137,6 +137,20 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
     CHECK(j.contains(key));
   }
   CHECK(j.at("final_cost").get<double>() < j.at("initial_cost").get<double>());
+  // final_cost is where the text report ends (the last stage), not the
+  // robust solve's, on a graph with outliers that every stage touches.
+  const std::string spoiled = (dir / "s.g2o").string();
+  REQUIRE(Run({"inject", graph, "-o", spoiled, "--outliers", "20"}).status == 0);
+  const Result text = Run({"optimize", spoiled, "-o", out});
+  const Result json = Run({"optimize", spoiled, "-o", out, "--json"});
+  REQUIRE(text.status == 0);
+  REQUIRE(json.status == 0);
+  const auto stages = nlohmann::json::parse(json.out);
+  REQUIRE(stages.at("refined") == true);
+  const std::size_t last_arrow = text.out.rfind("-> ");
+  REQUIRE(last_arrow != std::string::npos);
+  CHECK(stages.at("final_cost").get<double>() == Approx(std::stod(text.out.substr(last_arrow + 3))).epsilon(1e-5));
+  CHECK(stages.at("robust_final_cost").get<double>() != stages.at("final_cost").get<double>());
   // The time's breakdown: parts of time_s (robust solve and refinement).
   double parts = 0.0;
   for (const char* key : {"preprocessor_time_s", "linear_solver_time_s", "jacobian_time_s",
