@@ -155,7 +155,7 @@ std::vector<ClosureOutcome> ClosureOutcomesOf(const AnyPoseGraph& graph) {
         std::vector<ClosureOutcome> outcomes;
         for (const auto& c : g.constraints) {
           if (c.IsBetweenConsecutivePoses()) continue;
-          outcomes.push_back({c.from, c.to, g.IsSwitchedOn(c)});
+          outcomes.push_back({c.from, c.to, g.IsAccepted(c)});
         }
         return outcomes;
       },

@@ -685,6 +685,16 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     if (out.readmission) out.readmission->SetTimes(times);
   }
   for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
+  // The decisions travel with the graph, so that a reader of the written
+  // file counts a closure as this solve did.
+  if (options.method != RobustMethod::kNone) {
+    std::map<ClosureId, RobustDecision> decided;
+    for (const ClosureDecision& d : out.closures) decided.emplace(d.id, RobustDecision{d.accepted, d.weight});
+    for (auto& c : graph.constraints) {
+      const auto it = decided.find(c.id);
+      c.decision = it == decided.end() ? std::nullopt : std::optional<RobustDecision>(it->second);
+    }
+  }
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
   out.graph = std::move(graph);
@@ -695,9 +705,9 @@ template <typename PoseT>
 PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>& decisions) {
   const std::set<ClosureId> rejected = RejectedIds(decisions);
   std::erase_if(graph.constraints, [&](const Constraint<PoseT>& c) {
-    return rejected.contains(c.id) || !graph.IsSwitchedOn(c);
+    return rejected.contains(c.id) || !graph.IsAccepted(c);
   });
-  for (auto& c : graph.constraints) c.switch_id.reset();
+  for (auto& c : graph.constraints) c.switch_id.reset(), c.decision.reset();
   graph.switches.clear();
   return graph;
 }

@@ -182,7 +182,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     Provenance provenance;
     for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
     result.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
-                                        {c.T_frame_matched, information_scale * closure_information}, c.kind, provenance, {}, {}});
+                                        {c.T_frame_matched, information_scale * closure_information}, c.kind, provenance, {}, {}, {}});
   };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
     const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
@@ -204,7 +204,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     if (k > 0) {
       result.graph.constraints.push_back({ClosureId(static_cast<std::int64_t>(result.graph.constraints.size())),
                                           PoseId(static_cast<std::int64_t>(k - 1)), id,
-                                          {u, odometry_information(u)}, ClosureKind::kOdometry, {}, {}, {}});
+                                          {u, odometry_information(u)}, ClosureKind::kOdometry, {}, {}, {}, {}});
     }
     if (step.closure) {
       f.closure = true;

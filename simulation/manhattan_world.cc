@@ -89,7 +89,7 @@ SimulatedPoseGraph2 SimulateManhattanWorld(const ManhattanWorldOptions& options)
   auto add_edge = [&](int from, int to, const Pose2& noisy, const Eigen::Matrix3d& information,
                       ClosureKind kind) {
     const ClosureId id(static_cast<std::int64_t>(out.graph.constraints.size()));
-    Constraint<Pose2> c{id, PoseId(from), PoseId(to), {noisy, information}, kind, {}, {}, {}};
+    Constraint<Pose2> c{id, PoseId(from), PoseId(to), {noisy, information}, kind, {}, {}, {}, {}};
     out.graph.constraints.push_back(c);
     c.measurement.mean = truth[from].Between(truth[to]);
     out.truth.constraints.push_back(c);

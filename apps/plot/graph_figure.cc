@@ -23,7 +23,7 @@ Axes Build(const PoseGraph<PoseT>& graph, const std::string& title) {
   rejected.dashed = true;
   for (const auto& c : graph.constraints) {
     Series& s = c.IsBetweenConsecutivePoses() ? odometry
-                : graph.IsSwitchedOn(c) ? accepted
+                : graph.IsAccepted(c) ? accepted
                                                                                 : rejected;
     const Pose2& a = poses.at(c.from);
     const Pose2& b = poses.at(c.to);

@@ -40,6 +40,15 @@ struct RelativePoseMeasurement {
   InformationMatrix<PoseT> information = InformationMatrix<PoseT>::Identity();
 };
 
+// What a robust solve decided about a loop closure, kept with the corrected
+// graph (g2o: a #CATGRAPH_DECISION comment before the edge) so that every
+// reader counts it as the solver did, whatever the method.
+struct RobustDecision {
+  bool accepted = true;
+  double weight = 1.0;  // the residual's scale at the solution (switch or loss weight)
+  friend bool operator==(const RobustDecision&, const RobustDecision&) = default;
+};
+
 template <typename PoseT>
 struct Vertex {
   PoseId id;
@@ -57,6 +66,7 @@ struct Constraint {
   Provenance provenance;
   std::optional<SwitchId> switch_id;     // set for a switchable constraint
   std::optional<double> maxmix_weight;   // set for a max-mixture constraint
+  std::optional<RobustDecision> decision;  // set by a robust solve
 
   // Odometry in the sense of Vertigo's generator and the benchmark READMEs:
   // an edge between consecutive pose ids. Everything else is a loop closure.
@@ -90,6 +100,11 @@ struct PoseGraph {
   // turned off (Suenderhauf & Protzel's decision rule).
   bool IsSwitchedOn(const Constraint<PoseT>& c) const {
     return !c.switch_id || switches.at(*c.switch_id).value > 0.5;
+  }
+  // Whether `c` counts as accepted: a robust solve's decision where it left
+  // one (any method, readmission included), else its switch.
+  bool IsAccepted(const Constraint<PoseT>& c) const {
+    return c.decision ? c.decision->accepted : IsSwitchedOn(c);
   }
   // Gives every constraint that has no switch and satisfies `selected` a new
   // switch (initial value 1) with `prior`. Switch ids continue after every

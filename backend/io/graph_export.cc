@@ -47,7 +47,7 @@ nlohmann::json GraphJson(const PoseGraph<PoseT>& graph) {
                         {"parents", parents},
                         {"measurement", PoseJson(c.measurement.mean)},
                         {"information", information},
-                        {"accepted", graph.IsSwitchedOn(c)}};
+                        {"accepted", graph.IsAccepted(c)}};
     if (c.switch_id) e["switch"] = c.switch_id->value();
     if (c.maxmix_weight) e["maxmix_weight"] = *c.maxmix_weight;
     j["constraints"].push_back(e);
@@ -80,7 +80,7 @@ void Dot(const PoseGraph<PoseT>& graph, std::ostream& out) {
     out << "  " << c.from.value() << " -- " << c.to.value() << " [";
     if (c.kind == ClosureKind::kOdometry) {
       out << "color=gray50";
-    } else if (graph.IsSwitchedOn(c)) {
+    } else if (graph.IsAccepted(c)) {
       out << "color=forestgreen, tooltip=\"" << ToString(c.kind) << ' ' << c.id.value() << '"';
     } else {
       out << "color=red, style=dashed, tooltip=\"rejected " << ToString(c.kind) << ' '

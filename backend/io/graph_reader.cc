@@ -39,7 +39,8 @@ Family FamilyOfTag(std::string_view tag) {
       "VERTEX_SE2",          "EDGE_SE2",           "VERTEX_SE3:QUAT", "EDGE_SE3:QUAT",
       "FIX",                 "VERTEX_SWITCH",      "EDGE_SWITCH_PRIOR", "EDGE_SE2_SWITCHABLE",
       "EDGE_SE3_SWITCHABLE", "EDGE_SE2_MAXMIX"};
-  if (kG2oTags.contains(tag)) return Family::kG2o;
+  // catgraph's comments before an edge exist only in g2o files.
+  if (kG2oTags.contains(tag) || tag == kClosureMetadataTag || tag == kDecisionTag) return Family::kG2o;
   if (tag == "VERTEX2" || tag == "EDGE2" || tag == "EDGE3") return Family::kToroOrIsam;
   return Family::kNone;
 }
@@ -166,6 +167,8 @@ class GraphParser {
       : file_(file), format_(format), options_(options) {}
 
   void Parse(const Line& line, const std::optional<ClosureMetadata>& metadata);
+  std::size_t edge_count() const { return raw_.edges.size(); }
+  void SetLastEdgeDecision(const RobustDecision& decision) { raw_.edges.back().constraint.decision = decision; }
   PoseGraph<PoseT> Assemble(int last_line) const;
 
  private:
@@ -424,7 +427,17 @@ PoseGraph<PoseT> ParseLines(const std::string& name, const std::vector<PendingLi
                             GraphFormat format, const ReadGraphOptions& options, int last_line) {
   GraphParser<PoseT> parser(name, format, options);
   std::optional<ClosureMetadata> metadata;
+  std::optional<RobustDecision> decision;
   for (const PendingLine& pending : lines) {
+    if (pending.text.starts_with(kDecisionTag)) {
+      if (decision) {
+        throw FileError(name, pending.number, std::string(kDecisionTag) + " twice in a row; expected an edge line");
+      }
+      std::string error;
+      decision = ParseDecision(pending.text, &error);
+      if (!decision) throw FileError(name, pending.number, error);
+      continue;
+    }
     if (pending.text.starts_with(kClosureMetadataTag)) {
       if (metadata) {
         throw FileError(name, pending.number, std::string(kClosureMetadataTag) +
@@ -436,11 +449,17 @@ PoseGraph<PoseT> ParseLines(const std::string& name, const std::vector<PendingLi
       continue;
     }
     Line line(name, pending.number, Tokenize(pending.text));
+    const std::size_t edges = parser.edge_count();
     parser.Parse(line, metadata);
     metadata.reset();
+    if (decision) {
+      if (parser.edge_count() == edges) line.Fail(std::string(kDecisionTag) + " must be followed by an edge line");
+      parser.SetLastEdgeDecision(*decision);
+      decision.reset();
+    }
   }
-  if (metadata) {
-    throw FileError(name, last_line, std::string(kClosureMetadataTag) +
+  if (metadata || decision) {
+    throw FileError(name, last_line, std::string(metadata ? kClosureMetadataTag : kDecisionTag) +
                                          " at the end of the file; expected an edge line after it");
   }
   return parser.Assemble(last_line);
@@ -466,7 +485,7 @@ GraphFile ReadGraph(std::istream& in, const std::string& name, const ReadGraphOp
     const auto tokens = Tokenize(text);
     if (tokens.empty()) continue;
     if (tokens.front().starts_with("#")) {
-      if (text.starts_with(kClosureMetadataTag)) lines.push_back({number, text});
+      if (text.starts_with(kClosureMetadataTag) || text.starts_with(kDecisionTag)) lines.push_back({number, text});
       continue;
     }
     const int tag_dimension = DimensionOfTag(tokens.front());

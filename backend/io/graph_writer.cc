@@ -50,6 +50,7 @@ void WriteGraph(const PoseGraph<PoseT>& graph, std::ostream& out) {
     if (c.id.value() != index || c.kind != default_kind || !c.provenance.parents.empty()) {
       out << FormatClosureMetadata({c.id, c.kind, c.provenance}) << '\n';
     }
+    if (c.decision) out << FormatDecision(*c.decision) << '\n';
     ++index;
     LineWriter line(c.switch_id        ? (k2d ? "EDGE_SE2_SWITCHABLE" : "EDGE_SE3_SWITCHABLE")
                  : c.maxmix_weight ? "EDGE_SE2_MAXMIX"

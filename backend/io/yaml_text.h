@@ -2,8 +2,11 @@
 //
 // An alias (*name) lets a few hundred bytes stand for billions of nodes (the
 // "billion laughs"); catgraph's configurations, scenarios and vocabularies
-// never need one, so any alias is an error naming its line. Header-only:
-// every target that reads YAML links yaml-cpp itself.
+// never need one, so any alias is an error naming its line. So is anything
+// after the first document: each of these files is one document, and
+// yaml-cpp's document loop does not advance past a stray token at document
+// level (", 1" would loop for ever). Header-only: every target that reads
+// YAML links yaml-cpp itself.
 #ifndef CATGRAPH_BACKEND_IO_YAML_TEXT_H_
 #define CATGRAPH_BACKEND_IO_YAML_TEXT_H_
 
@@ -36,11 +39,18 @@ inline YAML::Node LoadYamlWithoutAliases(const std::string& text, const std::str
     const std::string& source;
   };
   try {
+    struct SecondDocumentRefuser : AliasRefuser {
+      using AliasRefuser::AliasRefuser;
+      void OnDocumentStart(const YAML::Mark& mark) override {
+        throw FileError(source, mark.line + 1, "text after the first YAML document; expected one document");
+      }
+    };
     std::istringstream in(text);
     YAML::Parser parser(in);
     AliasRefuser refuser(source);
-    while (parser.HandleNextDocument(refuser)) {
-    }
+    parser.HandleNextDocument(refuser);
+    SecondDocumentRefuser second(source);
+    parser.HandleNextDocument(second);
     return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw FileError(source, e.mark.is_null() ? 0 : e.mark.line + 1, "expected YAML: " + e.msg);

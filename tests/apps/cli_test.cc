@@ -242,6 +242,44 @@ TEST_CASE("inject, optimize, evaluate: the experiment in three commands", "[apps
   std::filesystem::remove_all(dir);
 }
 
+// Every method's decisions travel with the corrected graph: export and
+// evaluate, given nothing else, count the closures optimize rejected.
+TEST_CASE("export and evaluate read each method's decisions from the corrected graph", "[apps][evaluate][export]") {
+  const auto dir = testing::TempDir("cli_decisions");
+  const std::string graph = (dir / "g.g2o").string(), truth = (dir / "t.g2o").string();
+  const std::string spoiled = (dir / "s.g2o").string(), labels = (dir / "l.csv").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--truth", truth, "--poses", "400"}).status == 0);
+  REQUIRE(Run({"inject", graph, "-o", spoiled, "--outliers", "100", "--labels", labels}).status == 0);
+  for (const char* method : {"dcs", "cauchy", "huber", "gnc", "switchable"}) {
+    CAPTURE(method);
+    const std::string out = (dir / (std::string(method) + ".g2o")).string();
+    const std::string report = (dir / (std::string(method) + ".json")).string();
+    REQUIRE(Run({"optimize", spoiled, "-o", out, "--method", method, "--report", report}).status == 0);
+    const auto r = nlohmann::json::parse(testing::ReadText(report));
+    std::set<std::pair<int, int>> rejected;
+    for (const auto& c : r.at("closures")) {
+      if (!c.at("accepted").get<bool>()) rejected.emplace(c.at("from").get<int>(), c.at("to").get<int>());
+    }
+    CHECK(rejected.size() == r.at("rejected").get<std::size_t>());
+    REQUIRE(Run({"export", out, "-o", (dir / "e.json").string()}).status == 0);
+    const auto exported = nlohmann::json::parse(testing::ReadText(dir / "e.json"));
+    std::set<std::pair<int, int>> exported_rejected;
+    for (const auto& c : exported.at("constraints")) {
+      if (!c.at("accepted").get<bool>()) exported_rejected.emplace(c.at("from").get<int>(), c.at("to").get<int>());
+    }
+    CHECK(exported_rejected == rejected);
+    const Result plain = Run({"evaluate", out, "--truth", truth, "--labels", labels, "--json"});
+    const Result with_report = Run({"evaluate", out, "--truth", truth, "--labels", labels, "--report", report, "--json"});
+    REQUIRE(plain.status == 0);
+    REQUIRE(with_report.status == 0);
+    const auto a = nlohmann::json::parse(plain.out), b = nlohmann::json::parse(with_report.out);
+    for (const char* key : {"precision", "recall", "true_positives", "false_positives"}) CHECK(a.at(key) == b.at(key));
+    CHECK(a.at("true_positives").get<std::size_t>() + a.at("false_positives").get<std::size_t>() ==
+          r.at("accepted").get<std::size_t>());
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST_CASE("inject --groups N --group-size G adds N x G edges, as Vertigo's generator does", "[apps][inject]") {
   const auto dir = testing::TempDir("cli_groups");
   const std::string graph = (dir / "g.g2o").string();

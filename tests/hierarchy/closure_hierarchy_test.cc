@@ -38,10 +38,10 @@ TEST_CASE("hierarchy record: parents, ancestors nearest first, children, cycles 
 
   PoseGraph2 graph;
   for (int i = 0; i < 3; ++i) graph.vertices[PoseId(i)] = {PoseId(i), Pose2(i, 0, 0)};
-  graph.constraints.push_back({C(0), PoseId(0), PoseId(2), {}, ClosureKind::kVisual, {}, {}, {}});
-  graph.constraints.push_back({C(1), PoseId(0), PoseId(1), {}, ClosureKind::kOdometryInferred, {{C(0)}}, {}, {}});
+  graph.constraints.push_back({C(0), PoseId(0), PoseId(2), {}, ClosureKind::kVisual, {}, {}, {}, {}});
+  graph.constraints.push_back({C(1), PoseId(0), PoseId(1), {}, ClosureKind::kOdometryInferred, {{C(0)}}, {}, {}, {}});
   CHECK(ClosureHierarchy::FromGraph(AnyPoseGraph(graph)).ParentsOf(C(1)) == std::vector<ClosureId>{C(0)});
-  graph.constraints.push_back({C(2), PoseId(1), PoseId(2), {}, ClosureKind::kOdometryInferred, {{C(7)}}, {}, {}});
+  graph.constraints.push_back({C(2), PoseId(1), PoseId(2), {}, ClosureKind::kOdometryInferred, {{C(7)}}, {}, {}, {}});
   CHECK_THROWS_AS(ClosureHierarchy::FromGraph(AnyPoseGraph(graph)), std::invalid_argument);
 }
 

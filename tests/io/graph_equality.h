@@ -40,7 +40,7 @@ bool GraphsEqual(const PoseGraph<PoseT>& a, const PoseGraph<PoseT>& b, double to
     const auto& y = b.constraints[k];
     const bool same = x.id == y.id && x.from == y.from && x.to == y.to && x.kind == y.kind &&
                       x.provenance == y.provenance && x.switch_id == y.switch_id &&
-                      x.maxmix_weight == y.maxmix_weight &&
+                      x.maxmix_weight == y.maxmix_weight && x.decision == y.decision &&
                       PosesEqual(x.measurement.mean, y.measurement.mean, pose_tol) &&
                       x.measurement.information.isApprox(y.measurement.information, std::max(tol, 1e-300)) &&
                       (tol > 0.0 || x.measurement.information == y.measurement.information);

@@ -1,10 +1,12 @@
 #include <filesystem>
 #include <random>
 #include <sstream>
+#include <string>
 #include <variant>
 
 #include "tests/catch.h"
 
+#include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
 #include "tests/io/graph_equality.h"
 #include "tests/test_support.h"
@@ -147,6 +149,32 @@ TEST_CASE("closure kinds and provenance survive write and read", "[io][g2o]") {
   add(9, 5, 2, ClosureKind::kInjected, {});
   add(10, 3, 4, ClosureKind::kUnknown, {});  // consecutive ids but not odometry
   CHECK(testing::GraphsEqual(AnyPoseGraph(g), RoundTrip(g)));
+  // A robust solve's decisions, exactly, beside the metadata or alone.
+  g.constraints[2].decision = RobustDecision{false, 0.012345678901234567};
+  g.constraints[4].decision = RobustDecision{true, 1.0};
+  const AnyPoseGraph back = RoundTrip(g);
+  CHECK(testing::GraphsEqual(AnyPoseGraph(g), back));
+  CHECK_FALSE(std::get<PoseGraph2>(back).IsAccepted(std::get<PoseGraph2>(back).constraints[2]));
+}
+
+TEST_CASE("a malformed or misplaced decision comment names its line", "[io][g2o][bad-input]") {
+  auto error = [](const std::string& text) {
+    std::istringstream in(text);
+    try {
+      ReadGraph(in, "d.g2o");
+    } catch (const FileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string vertices = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\n";
+  const std::string edge = "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n";
+  CHECK(error(vertices + "#CATGRAPH_DECISION maybe 1\n" + edge).starts_with("d.g2o:3: #CATGRAPH_DECISION: expected"));
+  CHECK(error(vertices + "#CATGRAPH_DECISION rejected 1.5\n" + edge).starts_with("d.g2o:3: #CATGRAPH_DECISION"));
+  CHECK(error("#CATGRAPH_DECISION rejected 0\n" + vertices + edge)
+            .starts_with("d.g2o:2: #CATGRAPH_DECISION must be followed by an edge line"));
+  CHECK(error(vertices + edge + "#CATGRAPH_DECISION rejected 0\n").find("at the end of the file") != std::string::npos);
+  CHECK(error(vertices + "#CATGRAPH_DECISION rejected 0.25\n" + edge) == "no error");
 }
 
 TEST_CASE("an edge appended to a file catgraph wrote gets an id of its own", "[io][g2o]") {

@@ -109,5 +109,22 @@ TEST_CASE("YAML aliases are refused before they are expanded", "[io][bad-input][
   std::filesystem::remove_all(dir);
 }
 
+// yaml-cpp's document loop does not advance past a stray token at document
+// level; every YAML catgraph reads is one document, and the rest is refused
+// at its line rather than looping.
+TEST_CASE("YAML text after the first document is refused at its line", "[io][bad-input][bounds]") {
+  const auto dir = testing::TempDir("bounds_yaml_documents");
+  std::ofstream(dir / "sweep.yaml") << "output: runs.csv\n---\noutput: other.csv\n";
+  CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "sweep.yaml"),
+                    Catch::Contains("sweep.yaml:2: text after the first YAML document; expected one document"));
+  std::ofstream(dir / "stray.yaml") << ", 1\n";
+  CHECK_THROWS_WITH(ReadSweepConfigFile(dir / "stray.yaml"), Catch::Contains("stray.yaml:1: text after the first"));
+  std::ofstream(dir / "scenario.yaml") << "name: two\n...\n, x\n";
+  CHECK_THROWS_WITH(LoadScenario((dir / "scenario.yaml").string()), Catch::Contains("scenario.yaml:3: text after"));
+  std::ofstream(dir / "vocabulary.yml") << "%YAML:1.0\n---\nformat_version: 1\n---\n";
+  CHECK_THROWS_WITH(Vocabulary::Load(dir / "vocabulary.yml"), Catch::Contains("vocabulary.yml:4: text after"));
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace catgraph

@@ -1,6 +1,7 @@
 #include "backend/io/internal/closure_metadata.h"
 
 #include <charconv>
+#include <cstdio>
 #include <sstream>
 #include <vector>
 
@@ -40,6 +41,27 @@ std::optional<ClosureMetadata> ParseClosureMetadata(std::string_view line, std::
     metadata.provenance.parents.emplace_back(*parent);
   }
   return metadata;
+}
+
+std::optional<RobustDecision> ParseDecision(std::string_view line, std::string* error) {
+  std::istringstream in{std::string(line)};
+  std::string tag, verdict, weight_text, extra;
+  in >> tag >> verdict >> weight_text;
+  double weight = 0.0;
+  const auto [end, ec] = std::from_chars(weight_text.data(), weight_text.data() + weight_text.size(), weight);
+  if (tag != kDecisionTag || (verdict != "accepted" && verdict != "rejected") || weight_text.empty() ||
+      ec != std::errc() || end != weight_text.data() + weight_text.size() || !(weight >= 0.0 && weight <= 1.0) ||
+      (in >> extra)) {
+    *error = std::string(kDecisionTag) + ": expected 'accepted|rejected <weight in [0, 1]>'";
+    return std::nullopt;
+  }
+  return RobustDecision{verdict == "accepted", weight};
+}
+
+std::string FormatDecision(const RobustDecision& decision) {
+  char weight[32];
+  std::snprintf(weight, sizeof weight, "%.17g", decision.weight);
+  return std::string(kDecisionTag) + (decision.accepted ? " accepted " : " rejected ") + weight;
 }
 
 std::string FormatClosureMetadata(const ClosureMetadata& metadata) {
