@@ -154,7 +154,7 @@ void AddEvaluateCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--labels", o->labels, "Closure labels written by catgraph inject");
   cmd->add_option("--report", o->report,
                   "With --labels: take each closure's decision from this catgraph optimize "
-                  "--report instead of the estimate's switches (for dcs, cauchy, huber)");
+                  "--report instead of the estimate (whose decisions catgraph optimize writes into it)");
   cmd->add_option("--truth-gate", o->truth_gate_probability,
                   "With --labels: an outlier whose chi2 at the true poses is within this chi2 "
                   "quantile counts as explained by the truth (the optimiser's default gate)")

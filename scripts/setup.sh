@@ -4,10 +4,12 @@
 # test suite.
 #
 #   scripts/setup.sh demo    install, build, run the main job (README command 1)
-#   scripts/setup.sh test    install, build, run the whole test suite, then
-#                            build it with clang under AddressSanitizer + UBSan
-#                            and run it again, then every fuzz target for a
-#                            minute (README command 2; docs/fuzzing.md)
+#   scripts/setup.sh test    install, build, run the whole test suite, install
+#                            catgraph into a prefix and build and run
+#                            examples/ against it, then build the suite with
+#                            clang under AddressSanitizer + UBSan and run it
+#                            again, then every fuzz target for a minute
+#                            (README command 2; docs/fuzzing.md)
 #   scripts/setup.sh build   install and build only
 #
 # Idempotent; works as root or through sudo. Environment: CATGRAPH_JOBS (build
@@ -70,6 +72,8 @@ case "$mode" in
     ;;
   test)
     ctest --test-dir "$build_dir" -j "$jobs" --output-on-failure
+    echo "setup: examples/ built against the installed package"
+    bash "$root/scripts/examples.sh" "$build_dir"
     # One clang build serves both: the suite under the sanitizers and the
     # libFuzzer targets (CATGRAPH_FUZZ implies CATGRAPH_SANITIZE).
     echo "setup: the suite again under AddressSanitizer + UndefinedBehaviorSanitizer (clang)"
