@@ -391,7 +391,7 @@ CLI::Validator Finite() {
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
   CatGraphOptions& f = o.localization.filter;
   AddVocabularyOptions(cmd, o);
-  cmd.add_option("--particles", f.num_particles, "n_p")->capture_default_str();
+  cmd.add_option("--particles", f.num_particles, "n_p")->check(CLI::Range(1, kMaxParticles))->capture_default_str();
   cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
   cmd.add_option("--closure-min-evidence", f.closure_min_evidence,
                  "A visual closure also needs the frame's evidence to be this fraction of its self-evidence or more "

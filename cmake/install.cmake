@@ -9,7 +9,7 @@
 # finds every library as catgraph::NAME with its dependencies (docs/library.md).
 include(CMakePackageConfigHelpers)
 
-set(catgraph_exported graph io backend frontend hierarchy simulation plot)
+set(catgraph_exported graph io image_io backend frontend hierarchy simulation plot)
 foreach(name IN LISTS catgraph_exported)
   set_target_properties(catgraph_${name} PROPERTIES EXPORT_NAME ${name})
   list(APPEND catgraph_exported_targets catgraph_${name})

@@ -66,7 +66,9 @@ bool IsValidSigma(const Eigen::Vector3d& sigma) { return (sigma.array() > 0.0).a
 
 void Validate(const CatGraphOptions& o) {
   auto fail = [](const std::string& what) { throw std::invalid_argument("CatGraphOptions: " + what); };
-  if (o.num_particles < 1) fail("num_particles must be >= 1");
+  if (o.num_particles < 1 || o.num_particles > kMaxParticles) {
+    fail("num_particles must be from 1 to " + std::to_string(kMaxParticles));
+  }
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
   if (!(o.closure_min_evidence >= 0.0 && o.closure_min_evidence <= 1.0)) fail("closure_min_evidence must be in [0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");

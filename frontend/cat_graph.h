@@ -76,9 +76,13 @@ std::string_view ToString(NewPlaceMotion model);
 std::optional<NewPlaceMotion> NewPlaceMotionFromString(std::string_view text);  // "noise", "spread"
 std::vector<std::string> NewPlaceMotionNames();
 
+// The most particles a filter takes: memory grows by about 100 bytes per
+// particle and the time per frame linearly (docs/cli.md "Limits").
+inline constexpr int kMaxParticles = 100'000;
+
 // The CAT-Graph+ paper's Table I as defaults.
 struct CatGraphOptions {
-  int num_particles = 1000;                // n_p; >= 1
+  int num_particles = 1000;                // n_p; 1 to kMaxParticles
   double closure_threshold = 0.8;          // T_h on Eq 4; (0, 1]
   // A visual closure also needs the frame's evidence (CatGraphStep's
   // log_evidence: how much better the particles explain it than the mean

@@ -69,74 +69,7 @@ Vocabulary::Vocabulary(FeatureType feature, cv::Mat centres, ChowLiuTree tree)
   }
 }
 
-namespace {
 
-constexpr std::uintmax_t kMaxImageBytes = std::uintmax_t{256} << 20;
-constexpr std::uint64_t kMaxImagePixels = std::uint64_t{1} << 26;  // 67 megapixels
-
-std::uint32_t BigEndian(const std::string& b, std::size_t at, int bytes) {
-  std::uint32_t v = 0;
-  for (int i = 0; i < bytes; ++i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
-  return v;
-}
-
-// Width and height a PNG or JPEG header declares, read before anything is
-// decoded (a small file can declare 100 000 x 100 000 pixels); nullopt for
-// other formats and headers it cannot follow, which OpenCV then judges.
-std::optional<std::pair<std::uint32_t, std::uint32_t>> DeclaredSize(const std::string& b) {
-  if (b.size() >= 24 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 && b.compare(12, 4, "IHDR") == 0) {
-    return std::pair{BigEndian(b, 16, 4), BigEndian(b, 20, 4)};
-  }
-  if (b.size() < 4 || static_cast<unsigned char>(b[0]) != 0xFF || static_cast<unsigned char>(b[1]) != 0xD8) {
-    return std::nullopt;
-  }
-  // JPEG: walk the marker segments to the first start-of-frame.
-  std::size_t at = 2;
-  while (at + 9 <= b.size() && static_cast<unsigned char>(b[at]) == 0xFF) {
-    const unsigned marker = static_cast<unsigned char>(b[at + 1]);
-    const bool start_of_frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-    if (start_of_frame) return std::pair{BigEndian(b, at + 7, 2), BigEndian(b, at + 5, 2)};
-    at += 2 + BigEndian(b, at + 2, 2);
-  }
-  return std::nullopt;
-}
-
-// A PNG or JPEG cut short (a copy or download that did not finish): refused
-// here, before the decoder prints its own complaint to stderr.
-std::optional<std::string> TruncationOf(const std::string& b) {
-  static constexpr std::string_view kPngSignature = "\x89PNG\r\n\x1a\n";
-  if (b.starts_with(kPngSignature)) {
-    const std::size_t end = b.rfind("IEND");
-    if (end == std::string::npos || end + 8 > b.size()) return "a PNG without its end (IEND) chunk";
-  } else if (b.starts_with("\xff\xd8")) {
-    if (b.rfind("\xff\xd9") == std::string::npos) return "a JPEG without its end-of-image marker";
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
-cv::Mat ReadImage(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  const std::string bytes = ReadWholeFile(path, kMaxImageBytes, "an image (PNG, JPEG, ...)");
-  if (const auto size = DeclaredSize(bytes);
-      size && std::uint64_t{size->first} * std::uint64_t{size->second} > kMaxImagePixels) {
-    throw FileError(name, 0, "declares " + std::to_string(size->first) + " x " + std::to_string(size->second) +
-                                 " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
-  }
-  if (const auto truncated = TruncationOf(bytes)) {
-    throw FileError(name, 0, "is " + *truncated + " (cut short?); expected a whole image");
-  }
-  cv::Mat image;
-  try {
-    image = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
-                         cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    throw FileError(name, 0, "cannot decode the image: " + e.msg);
-  }
-  if (image.empty()) throw FileError(name, 0, "cannot decode the image");
-  return image;
-}
 
 cv::Mat ComputeDescriptors(FeatureType feature, const cv::Mat& image) {
   cv::Mat grey = image;

@@ -22,6 +22,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "backend/io/image_file.h"  // ReadImage, for the images a vocabulary is trained on
 #include "frontend/fabmap.h"
 
 namespace catgraph {
@@ -40,11 +41,6 @@ struct VocabularyOptions {
   std::size_t max_descriptors = 200000;    // a random subset beyond this is clustered; >= words
   std::uint64_t seed = 1;
 };
-
-// An image file as colour (BGR); throws FileError naming the file when it
-// cannot be read or decoded, is larger than 256 MB, or (PNG, JPEG) declares
-// more than 2^26 pixels, checked before anything is decoded.
-cv::Mat ReadImage(const std::filesystem::path& path);
 
 // Descriptors of an image (colour or grey; detected on grey), one CV_32F row
 // each (binary descriptors as byte values).

@@ -23,6 +23,7 @@
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
+#include "backend/io/image_file.h"
 #include "backend/io/trajectory_io.h"
 #include "frontend/vocabulary.h"
 #include "simulation/scenario.h"
@@ -128,6 +129,17 @@ inline void DatasetFolder(std::string_view input) {
   } catch (const FileError&) {
   }
   WriteFile(root / replaced.name, replaced.valid);
+}
+
+// A camera image (the whole input), through the PNG and JPEG decoders and
+// OpenCV's for other formats.
+inline void Image(std::string_view input) {
+  const std::filesystem::path path = ScratchDir() / "image";
+  WriteFile(path, input);
+  try {
+    ReadImage(path);
+  } catch (const FileError&) {
+  }
 }
 
 // Sweep configurations (YAML, JSON) and sweep CSVs, by the first byte.

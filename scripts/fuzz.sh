@@ -10,7 +10,7 @@
 # most FUZZ_CHUNK executions (default 100000). FUZZ_TIMEOUT: seconds of wall
 # time one input may take (default 10; libFuzzer measures wall time, so a
 # campaign at low priority on a busy machine needs more). TARGETs among graph trajectory scenario
-# dataset sweep vocabulary (default all). The seed corpus is made from the
+# dataset sweep vocabulary image (default all). The seed corpus is made from the
 # project's own test fixtures, scenarios, sweep configurations and files the
 # release build (build/apps/catgraph, when present) generates; each run grows
 # build-fuzz/corpus/TARGET. A crash, leak, hang (> 10 s), out-of-memory
@@ -27,7 +27,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
-all=(graph trajectory scenario dataset sweep vocabulary)
+all=(graph trajectory scenario dataset sweep vocabulary image)
 targets=("$@")
 [ "${#targets[@]}" -gt 0 ] || targets=("${all[@]}")
 build_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
@@ -73,6 +73,8 @@ done
 seed sweep 00 "$root"/docs/experiments/*.yaml
 seed sweep 02 "$root"/docs/experiments/*.csv
 seed vocabulary 00 "$generated/vocabulary.yml"
+# Small PNGs and JPEGs of each layout (fuzz/seeds/image/), as they are.
+mkdir -p "$build_dir/corpus/image" && cp "$root"/fuzz/seeds/image/* "$build_dir/corpus/image/"
 # Inputs that once found a bug, as they are (they carry their first byte).
 for t in "${all[@]}"; do
   if [ -d "$root/tests/fixtures/fuzz/$t" ]; then

@@ -13,6 +13,7 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
+#include "backend/io/image_file.h"
 
 namespace catgraph {
 namespace {
@@ -80,8 +81,7 @@ VprBenchImportSummary ImportVprBench(const std::filesystem::path& source,
        {std::tuple{&reference, 1, 1}, std::tuple{&query, 3, 2}}) {
     for (std::size_t i = 0; i < images->size(); ++i) {
       const std::filesystem::path& from = (*images)[i];
-      const cv::Mat image = cv::imread(from.string(), cv::IMREAD_COLOR);
-      if (image.empty()) throw FileError(from.string(), 0, "cannot decode the image; expected a JPEG or PNG");
+      const cv::Mat image = ReadImage(from);
       if (size.empty()) size = image.size();
       char name[32];
       std::snprintf(name, sizeof name, "images/%06zu.png", d.frames.size());

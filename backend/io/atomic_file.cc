@@ -41,11 +41,22 @@ void WriteFileAtomically(const std::filesystem::path& path,
     {
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
       if (!out) {
-        throw FileError(name, 0, std::string("cannot create file: ") + std::strerror(errno));
+        const int error = errno;
+        const std::filesystem::path folder = path.parent_path().empty() ? "." : path.parent_path();
+        if (!std::filesystem::is_directory(folder)) {
+          throw FileError(name, 0, "cannot create file: its folder " + folder.string() + " does not exist");
+        }
+        throw FileError(name, 0, std::string("cannot create file: ") + std::strerror(error));
       }
+      errno = 0;
       write(out);
       out.flush();
-      if (!out) throw FileError(name, 0, "write failed (disk full?)");
+      if (!out) {
+        // The stream keeps no error code; errno is the failed write's
+        // (ENOSPC for a full disk, EFBIG past the file-size limit).
+        const int error = errno;
+        throw FileError(name, 0, std::string("write failed: ") + (error != 0 ? std::strerror(error) : "disk full?"));
+      }
     }
     SyncFile(tmp);
     std::error_code ec;

@@ -1010,15 +1010,14 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
 }
 
 // Every command of the test above on a 625-frame office
-// (tests/fixtures/office-change-short.yaml): the ones the sanitizer build
-// runs in place of the two full-size office tests (scripts/setup.sh). The
-// short loop leaves CAT-Graph only a few metres before the change; under
+// (tests/fixtures/office-change-short.yaml), with the accuracy each must
+// reach. The short loop leaves CAT-Graph only a few metres before the change; under
 // the earlier defaults (2026-12-03) it made false visual closures there, now
 // none is over 1 m. The false closures the back end must reject are
 // injected, in the hierarchy experiment at the end.
 TEST_CASE("every stage of the demo on a short office: no wrong visual closure, the changed corridor inferred, the "
           "map corrected, injected false closures rejected",
-          "[apps][localize][map]") {
+          "[apps][localize][map][slow]") {
   const auto root = testing::TempDir("demo_short");
   const Result missing = Run({"demo", "-o", (root / "none").string(), "--scenario", "no-such.yaml", "--quiet"});
   CHECK(missing.status == 1);
@@ -1127,6 +1126,59 @@ TEST_CASE("every stage of the demo on a short office: no wrong visual closure, t
     // feedback re-runs included: they must not bring the false matches back.
     if (f[1] == "cascade") CHECK(std::stod(f[10]) == Approx(ate_corrected).margin(1e-4));
   }
+  std::filesystem::remove_all(root);
+}
+
+// The same commands on the short office at 3 frames/s (375 frames): what the
+// sanitizer build runs of the mapping pipeline, where the [slow] tests above
+// are left to the release build (tests/CMakeLists.txt). It checks that every
+// stage runs and writes what it promises; the tests above check accuracy.
+TEST_CASE("every command that maps runs on a 375-frame office and writes its outputs", "[apps][localize][map]") {
+  const auto root = testing::TempDir("demo_small");
+  std::string scenario = testing::ReadText(testing::Fixture("office-change-short.yaml"));
+  const std::string rate = "frame_rate_hz: 5.0";
+  REQUIRE(scenario.find(rate) != std::string::npos);
+  scenario.replace(scenario.find(rate), rate.size(), "frame_rate_hz: 3.0");
+  std::ofstream(root / "office-small.yaml") << scenario;
+  const Result demo = Run({"demo", "-o", root.string(), "--scenario", (root / "office-small.yaml").string(), "--quiet"});
+  INFO(demo.out << demo.err);
+  REQUIRE(demo.status == 0);
+  CHECK(demo.out.find("375 frames over two traversals") != std::string::npos);
+  const auto data = root / "office-small", out = root / "map";
+  std::ifstream report_in(out / "report.json");
+  const auto report = nlohmann::json::parse(report_in);
+  int visual = 0, inferred = 0;
+  for (const auto& c : report.at("closures")) {
+    if (c.at("kind") == "inferred") {
+      ++inferred;
+      CHECK(c.at("parents").size() == 2);
+    } else {
+      ++visual;
+    }
+  }
+  CHECK(visual > 0);
+  CHECK(inferred > 0);
+  for (const char* file : {"corrected.g2o", "trajectory.tum", "groundtruth.tum", "index.html"}) {
+    CHECK(std::filesystem::exists(out / file));
+  }
+  CheckNonTrivialImage(out / "map.png");
+  CheckNonTrivialImage(out / "localization.png");
+
+  for (const std::vector<std::string>& command :
+       {std::vector<std::string>{"sad-match", data.string(), "-o", (root / "sad").string()},
+        {"evidence", data.string(), "-o", (root / "evidence").string(), "--quiet"},
+        {"inference-sweep", data.string(), "-o", (root / "sweep").string(), "--d-tot", "1", "--d-loc", "2",
+         "--back-end", "--quiet"},
+        {"hierarchy-experiment", data.string(), "-o", (root / "experiment").string(), "--seeds", "1",
+         "--inject-false-visual", "2"}}) {
+    const Result r = Run(command);
+    INFO(command[0] << ": " << r.out << r.err);
+    CHECK(r.status == 0);
+  }
+  CHECK(ReadCsv(root / "sad" / "matches.csv").rows.size() > 0);
+  CHECK(ReadCsv(root / "evidence" / "evidence.csv").rows.size() > 0);
+  CHECK(ReadCsv(root / "sweep" / "sweep.csv").rows.size() == 1);
+  CHECK(ReadCsv(root / "experiment" / "hierarchy-experiment.csv").rows.size() == 3);
   std::filesystem::remove_all(root);
 }
 

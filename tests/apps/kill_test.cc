@@ -5,6 +5,7 @@
 // finished. docs/cli.md "Outputs".
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -34,10 +35,11 @@ namespace {
 
 // Runs the catgraph binary with `args`, its output to `log`; when
 // `kill_when` is given it is polled every 2 ms and, once true, the process is
-// killed with SIGKILL unless it ended first. Returns the exit status, or -1
-// when it was killed.
+// killed with SIGKILL unless it ended first. A `file_size_limit` (bytes) makes
+// every write past it fail with EFBIG, as a full disk makes it fail with
+// ENOSPC. Returns the exit status, or -1 when it was killed.
 int Run(const std::vector<std::string>& args, const std::function<bool()>& kill_when = {},
-        const std::string& log = "/dev/null") {
+        const std::string& log = "/dev/null", rlim_t file_size_limit = RLIM_INFINITY) {
   std::vector<std::string> copy = args;
   std::string binary = CATGRAPH_BINARY;
   std::vector<char*> argv = {binary.data()};
@@ -48,6 +50,11 @@ int Run(const std::vector<std::string>& args, const std::function<bool()>& kill_
     const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(out, 1);
     ::dup2(out, 2);
+    if (file_size_limit != RLIM_INFINITY) {
+      ::signal(SIGXFSZ, SIG_IGN);  // a write past the limit then fails instead of killing (kept across exec)
+      const rlimit limit{file_size_limit, file_size_limit};
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
     ::execv(argv[0], argv.data());
     ::_exit(127);
   }
@@ -170,6 +177,46 @@ TEST_CASE("simulate and map killed at random points leave the earlier output who
   REQUIRE(Run(mapping) == 0);
   CheckNoTornFile(map);
   CHECK(Listing(root) == std::vector<std::string>{"data", "map"});
+  std::filesystem::remove_all(root);
+}
+
+// A full disk cannot be had in the suite (no tmpfs to fill); the file-size
+// limit fails writes the same way, from inside the process: every file
+// larger than 24 kB (the images, the larger tables and figures) cannot be
+// written. The earlier output stays whole, nothing is left beside it, and the
+// error names the file.
+TEST_CASE("a write that fails part-way, as on a full disk, leaves the earlier output whole and nothing beside it",
+          "[apps][kill]") {
+  const auto root = testing::TempDir("full_disk");
+  const std::string data = (root / "data").string(), map = (root / "map").string();
+  auto simulate = [&](const char* frames) {
+    return std::vector<std::string>{"simulate", "--scenario", "office-change", "--frames", frames,
+                                    "-o",       data,           "--threads",     "1",      "--quiet"};
+  };
+  const std::vector<std::string> mapping = {"map", data, "-o", map, "--quiet", "--threads", "1"};
+  REQUIRE(Run(simulate("60")) == 0);
+  REQUIRE(Run(mapping) == 0);
+  const std::string frames = Slurp(std::filesystem::path(data) / "frames.csv");
+  const std::string report = Slurp(std::filesystem::path(map) / "report.json");
+  const std::vector<std::string> data_files = Listing(std::filesystem::path(data) / "images");
+  const auto log = (root / "log").string();
+  constexpr rlim_t kLimit = 24 * 1024;
+
+  CHECK(Run(simulate("80"), {}, log, kLimit) == 1);
+  std::string err = Slurp(log);
+  CHECK(err.find("write failed: File too large") != std::string::npos);
+  CHECK(err.find("/images/000") != std::string::npos);  // the image it could not write
+  CHECK(Slurp(std::filesystem::path(data) / "frames.csv") == frames);
+  CHECK(Listing(std::filesystem::path(data) / "images") == data_files);
+  CHECK(ReadDataset(data).frames.size() == 60);
+
+  CHECK(Run(mapping, {}, log, kLimit) == 1);
+  err = Slurp(log);
+  CHECK(err.find("write failed: File too large") != std::string::npos);
+  CHECK(Slurp(std::filesystem::path(map) / "report.json") == report);
+  CheckNoTornFile(map);
+  std::filesystem::remove(log);
+  CHECK(Listing(root) == std::vector<std::string>{"data", "map"});  // no staging folder, no temporary file
   std::filesystem::remove_all(root);
 }
 

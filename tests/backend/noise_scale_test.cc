@@ -107,7 +107,7 @@ TEST_CASE("short cycles measure how far the information understates the noise",
 }
 
 TEST_CASE("the gate widens by the measured noise scale on overconfident information, and only there",
-          "[backend][noise-scale][switchable]") {
+          "[backend][noise-scale][switchable][slow]") {
   ManhattanWorldOptions world;
   world.num_poses = 1000;
   world.seed = 9;
@@ -145,7 +145,7 @@ TEST_CASE("the gate widens by the measured noise scale on overconfident informat
 
 TEST_CASE("information that overstates Gaussian noise: the accepted closures' cycles narrow the "
           "gate, and false closures near the truth are rejected with every true one kept",
-          "[backend][noise-scale][switchable]") {
+          "[backend][noise-scale][switchable][slow]") {
   const OverstatedWorld world = SimulateOverstatedWorld(1500, 3, 500, 3);
   const PoseGraph2& graph = world.graph;
   std::set<ClosureId> injected;

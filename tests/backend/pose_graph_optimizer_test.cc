@@ -306,7 +306,7 @@ TEST_CASE("spanning-tree initialisation chains odometry exactly", "[backend][ini
 
 TEST_CASE("switchable constraints with the default gate reject injected closures and keep "
           "true ones on a graph with correct information",
-          "[backend][switchable]") {
+          "[backend][switchable][slow]") {
   const auto [sim, injected] = SpoiledManhattanWorld(1000, 9, 50, 3);
   std::size_t true_closures = 0;
   // The gate is chi2's quantile for g2o's cost, the chordal cost's own
@@ -367,7 +367,7 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
 // gives, with the same decisions. Long false closures (random policy) make
 // the full solve's late iterations the costly ones.
 TEST_CASE("the robust solve stops when its decisions settle, with the full solve's decisions and map",
-          "[backend][refine]") {
+          "[backend][refine][slow]") {
   const SimulatedPoseGraph2 sim = SpoiledManhattanWorld(1000, 21, 200, 8).sim;
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
     CAPTURE(ToString(method));
@@ -400,7 +400,7 @@ TEST_CASE("the robust solve stops when its decisions settle, with the full solve
 // right information: the true closures the gate rejected come back, the
 // injected ones stay out, for every method deciding at the gate.
 TEST_CASE("readmission brings back the true closures the gate rejected and no false one",
-          "[backend][readmit]") {
+          "[backend][readmit][slow]") {
   const auto [sim, injected] = SpoiledManhattanWorld(800, 4, 50, 6, OutlierPolicy::kLocal);
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs, RobustMethod::kGnc}) {
     CAPTURE(ToString(method));

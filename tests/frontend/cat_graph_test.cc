@@ -515,7 +515,7 @@ TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, 
 }
 
 TEST_CASE("A visual closure needs what the camera sees: a cloud held on the map through a change does not close there",
-          "[frontend][catgraph][catgraph-plus]") {
+          "[frontend][catgraph][catgraph-plus][slow]") {
   // Leaving the map all but ruled out, the odometry carries the visual
   // cloud through the changed stretch whole, and Eq 4 alone closes there on
   // the odometry. Asking each closure for a fifth of the frame's
@@ -632,7 +632,7 @@ void CheckDeepInferences(const DeepInferences& deep, double max_rms_m) {
 }
 
 TEST_CASE("CAT-Graph+ follows the robot along the old path through 23 m of change on noisy odometry",
-          "[frontend][catgraph][catgraph-plus]") {
+          "[frontend][catgraph][catgraph-plus][slow]") {
   // The odometric hypothesis diffuses with the filter's Q; 10 m and more
   // after the last visual closure its inferences stay within a few steps of
   // the truth. Over filter seeds 1-40 the rms of those inferences is, per
@@ -713,7 +713,7 @@ TEST_CASE("Eq 2 over a window of path: images pointing a little behind no longer
 }
 
 TEST_CASE("O on its own Q: the visual filter as before, O's along-track wander narrower with a smaller sigma_x",
-          "[frontend][catgraph][catgraph-plus]") {
+          "[frontend][catgraph][catgraph-plus][slow]") {
   // V never depends on O: with O's Q set, V's steps are the same, bit for
   // bit, and O's inferences are other ones.
   const Eigen::Vector3d tight(0.02, 0.05, 0.005);
@@ -1162,7 +1162,7 @@ TEST_CASE("Eq 6 weighs the new place's odometry on new_place_motion_sigma when i
 // distance, so every place shares words with the places behind it, as a
 // forward camera in a corridor does. Nothing is ever revisited.
 TEST_CASE("The odometric gate keeps a first pass through an aliased corridor free of closures",
-          "[frontend][catgraph]") {
+          "[frontend][catgraph][slow]") {
   constexpr double kStep = 0.05, kLength = 25.0;
   auto run = [&](bool gate, std::uint64_t seed) {
     std::mt19937_64 rng(seed);

@@ -1,0 +1,27 @@
+// Camera images from files a stranger wrote.
+//
+// PNG and JPEG are decoded here with libpng and libjpeg, whose complaints
+// become the error instead of lines on stderr: a corrupt image (a bad
+// checksum, a broken compressed stream, a JPEG the decoder had to patch up)
+// is refused naming the file and what is wrong, where OpenCV's reader prints
+// the library's message and, for JPEG, returns the patched pixels. Other
+// formats (BMP, TIFF, ...) go to OpenCV. The pixels are those OpenCV's
+// cv::imread(path, cv::IMREAD_COLOR) gives.
+#ifndef CATGRAPH_BACKEND_IO_IMAGE_FILE_H_
+#define CATGRAPH_BACKEND_IO_IMAGE_FILE_H_
+
+#include <cstdint>
+#include <filesystem>
+
+#include <opencv2/core.hpp>
+
+namespace catgraph {
+
+// An image file as 8-bit colour (BGR). Throws FileError naming the file when
+// it cannot be read or decoded, is corrupt, is larger than 256 MB, or (PNG,
+// JPEG) declares more than 2^26 pixels, checked before anything is decoded.
+cv::Mat ReadImage(const std::filesystem::path& path);
+
+}  // namespace catgraph
+
+#endif  // CATGRAPH_BACKEND_IO_IMAGE_FILE_H_
