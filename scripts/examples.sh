@@ -52,4 +52,16 @@ if ! awk '/visual +frame/ {n++; e = $7; sub(/^\(/, "", e); if (e + 0 > 1.0) bad+
   cat "$work/localize_dataset.txt" >&2
   exit 1
 fi
-echo "examples: installed to $prefix; solve_g2o, false_closure and localize_dataset built against it and ran"
+# The Python package as installed, by Debian's interpreter.
+python_path="$prefix/lib/python3/dist-packages"
+PYTHONPATH="$python_path" /usr/bin/python3 "$root/examples/robust_solve.py" > "$work/robust_solve.txt"
+if ! awk '$1 == "switchable" && $3 == "1.000" && $4 == "1.000" {found = 1} END {exit !found}' "$work/robust_solve.txt"; then
+  echo "examples: robust_solve.py: expected switchable at precision and recall 1.000:" >&2
+  cat "$work/robust_solve.txt" >&2
+  exit 1
+fi
+PYTHONPATH="$python_path" /usr/bin/python3 "$root/examples/robust_solve.py" "$work/world-outliers.g2o" \
+  "$work/solved-python.g2o" > "$work/robust_solve_file.txt"
+expect robust_solve.py "20 rejected" "$work/robust_solve_file.txt"
+echo "examples: installed to $prefix; solve_g2o, false_closure and localize_dataset built against it and ran;" \
+  "robust_solve.py ran on the installed Python package"

@@ -65,6 +65,13 @@ configure_and_build() {
 install_missing_packages
 step "release build"
 configure_and_build "$build_dir"
+# `import catgraph` for this user: the built package linked into Debian
+# Python's user site-packages (as `pip install -e` would; a rebuild updates
+# it in place).
+user_site="$(/usr/bin/python3 -m site --user-site)"
+mkdir -p "$user_site"
+ln -sfn "$build_dir/python/catgraph" "$user_site/catgraph"
+echo "setup: python3 can import catgraph ($user_site/catgraph -> $build_dir/python/catgraph)"
 
 case "$mode" in
   build) ;;
@@ -83,7 +90,7 @@ case "$mode" in
     # libFuzzer targets (CATGRAPH_FUZZ implies CATGRAPH_SANITIZE).
     step "the suite again under AddressSanitizer + UndefinedBehaviorSanitizer (clang): build"
     configure_and_build "$build_dir-sanitize" -DCMAKE_CXX_COMPILER=clang++-14 -DCATGRAPH_FUZZ=ON \
-      -DCATGRAPH_BUILD_BENCH=OFF
+      -DCATGRAPH_BUILD_BENCH=OFF -DCATGRAPH_BUILD_PYTHON=OFF
     # The sanitizer build registers every case but the [slow] ones
     # (tests/CMakeLists.txt); the release pass above ran those.
     step "the suite under the sanitizers"
