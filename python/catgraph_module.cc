@@ -295,6 +295,17 @@ void BindGraph(py::module_& m) {
         py::arg("path"), py::arg("format") = "auto", "Reads a g2o, TORO or iSAM file.");
 }
 
+// Calls `f` with `pose` as the Pose2 or Pose3 it holds (a TypeError for
+// anything else).
+template <typename F>
+void WithPose(const py::object& pose, F f) {
+  if (py::isinstance<Pose2>(pose)) {
+    f(pose.cast<Pose2>());
+  } else {
+    f(pose.cast<Pose3>());
+  }
+}
+
 void BindFactorGraph(py::module_& m) {
   py::class_<Summary>(m, "Summary", "How a solve ended.")
       .def_property_readonly("usable", &Summary::IsUsable, "converged, or stopped at the limit with a finite cost")
@@ -324,27 +335,22 @@ void BindFactorGraph(py::module_& m) {
       .def("add_between",
            [](FactorGraph& g, std::int64_t from, std::int64_t to, const py::object& z,
               const std::optional<Eigen::MatrixXd>& information) {
-             if (py::isinstance<Pose2>(z)) {
-               g.Emplace<BetweenFactor<Pose2>>(PoseId(from), PoseId(to),
-                                               RelativePoseMeasurement<Pose2>{z.cast<Pose2>(), InformationOr<Pose2>(information)});
-             } else {
-               g.Emplace<BetweenFactor<Pose3>>(PoseId(from), PoseId(to),
-                                               RelativePoseMeasurement<Pose3>{z.cast<Pose3>(), InformationOr<Pose3>(information)});
-             }
+             WithPose(z, [&](const auto& pose) {
+               using PoseT = std::decay_t<decltype(pose)>;
+               g.Emplace<BetweenFactor<PoseT>>(PoseId(from), PoseId(to),
+                                               RelativePoseMeasurement<PoseT>{pose, InformationOr<PoseT>(information)});
+             });
            },
            py::arg("from_id"), py::arg("to_id"), py::arg("measurement"), py::arg("information") = py::none())
       .def("add_switchable_between",
            [](FactorGraph& g, std::int64_t from, std::int64_t to, std::int64_t switch_id, const py::object& z,
               const std::optional<Eigen::MatrixXd>& information) {
-             if (py::isinstance<Pose2>(z)) {
-               g.Emplace<SwitchableBetweenFactor<Pose2>>(
+             WithPose(z, [&](const auto& pose) {
+               using PoseT = std::decay_t<decltype(pose)>;
+               g.Emplace<SwitchableBetweenFactor<PoseT>>(
                    PoseId(from), PoseId(to), SwitchId(switch_id),
-                   RelativePoseMeasurement<Pose2>{z.cast<Pose2>(), InformationOr<Pose2>(information)});
-             } else {
-               g.Emplace<SwitchableBetweenFactor<Pose3>>(
-                   PoseId(from), PoseId(to), SwitchId(switch_id),
-                   RelativePoseMeasurement<Pose3>{z.cast<Pose3>(), InformationOr<Pose3>(information)});
-             }
+                   RelativePoseMeasurement<PoseT>{pose, InformationOr<PoseT>(information)});
+             });
            },
            py::arg("from_id"), py::arg("to_id"), py::arg("switch_id"), py::arg("measurement"),
            py::arg("information") = py::none(),
@@ -357,11 +363,10 @@ void BindFactorGraph(py::module_& m) {
            py::arg("switch_id"), py::arg("mean") = 1.0, py::arg("information") = 1.0)
       .def("add_prior",
            [](FactorGraph& g, std::int64_t id, const py::object& pose, const std::optional<Eigen::MatrixXd>& information) {
-             if (py::isinstance<Pose2>(pose)) {
-               g.Emplace<PriorFactor<Pose2>>(PoseId(id), pose.cast<Pose2>(), InformationOr<Pose2>(information));
-             } else {
-               g.Emplace<PriorFactor<Pose3>>(PoseId(id), pose.cast<Pose3>(), InformationOr<Pose3>(information));
-             }
+             WithPose(pose, [&](const auto& prior) {
+               using PoseT = std::decay_t<decltype(prior)>;
+               g.Emplace<PriorFactor<PoseT>>(PoseId(id), prior, InformationOr<PoseT>(information));
+             });
            },
            py::arg("id"), py::arg("pose"), py::arg("information") = py::none())
       .def("set_constant_pose", [](FactorGraph& g, std::int64_t id) { g.SetConstant(PoseKey(PoseId(id))); },
