@@ -1,5 +1,6 @@
 #include "backend/io/image_file.h"
 
+#include <cctype>
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
@@ -26,33 +27,61 @@ constexpr std::uintmax_t kMaxImageBytes = std::uintmax_t{256} << 20;
 constexpr std::uint64_t kMaxImagePixels = std::uint64_t{1} << 26;  // 67 megapixels
 constexpr std::string_view kPngSignature = "\x89PNG\r\n\x1a\n";
 
-std::uint32_t BigEndian(const std::string& b, std::size_t at, int bytes) {
-  std::uint32_t v = 0;
-  for (int i = 0; i < bytes; ++i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
-  return v;
-}
-
 bool IsJpeg(const std::string& b) {
   return b.size() >= 2 && static_cast<unsigned char>(b[0]) == 0xFF && static_cast<unsigned char>(b[1]) == 0xD8;
 }
 
-// Width and height a PNG or JPEG header declares, read before anything is
-// decoded (a small file can declare 100 000 x 100 000 pixels); nullopt for
-// other formats and headers it cannot follow, which the decoder then judges.
-std::optional<std::pair<std::uint32_t, std::uint32_t>> DeclaredSize(const std::string& b) {
-  if (b.size() >= 24 && b.starts_with(kPngSignature) && b.compare(12, 4, "IHDR") == 0) {
-    return std::pair{BigEndian(b, 16, 4), BigEndian(b, 20, 4)};
+std::uint32_t LittleEndian(const std::string& b, std::size_t at, int bytes) {
+  std::uint32_t v = 0;
+  for (int i = bytes - 1; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
+  return v;
+}
+
+bool IsPnm(const std::string& b) { return b.size() >= 2 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6'; }
+bool IsBmp(const std::string& b) { return b.starts_with("BM"); }
+
+// Width and height a PNM (PBM, PGM, PPM) or BMP header declares, read
+// before OpenCV decodes the file; nullopt for a header that does not say.
+std::optional<std::pair<std::uint64_t, std::uint64_t>> DeclaredSize(const std::string& b) {
+  if (IsPnm(b)) {
+    // "P6", then width and height as decimal tokens among blanks and
+    // #-comments.
+    std::uint64_t size[2] = {0, 0};
+    std::size_t at = 2;
+    for (std::uint64_t& v : size) {
+      while (at < b.size() && (std::isspace(static_cast<unsigned char>(b[at])) || b[at] == '#')) {
+        if (b[at] == '#') {
+          while (at < b.size() && b[at] != '\n') ++at;
+        } else {
+          ++at;
+        }
+      }
+      const std::size_t start = at;
+      while (at < b.size() && at - start < 10 && std::isdigit(static_cast<unsigned char>(b[at]))) {
+        v = 10 * v + static_cast<std::uint64_t>(b[at++] - '0');
+      }
+      if (at == start) return std::nullopt;
+    }
+    return std::pair{size[0], size[1]};
   }
-  if (!IsJpeg(b)) return std::nullopt;
-  // JPEG: walk the marker segments to the first start-of-frame.
-  std::size_t at = 2;
-  while (at + 9 <= b.size() && static_cast<unsigned char>(b[at]) == 0xFF) {
-    const unsigned marker = static_cast<unsigned char>(b[at + 1]);
-    const bool start_of_frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-    if (start_of_frame) return std::pair{BigEndian(b, at + 7, 2), BigEndian(b, at + 5, 2)};
-    at += 2 + BigEndian(b, at + 2, 2);
+  if (IsBmp(b) && b.size() >= 26) {
+    if (LittleEndian(b, 14, 4) == 12) return std::pair{std::uint64_t{LittleEndian(b, 18, 2)}, std::uint64_t{LittleEndian(b, 20, 2)}};
+    // Signed 32-bit; a negative height is a top-down image.
+    const auto width = static_cast<std::int32_t>(LittleEndian(b, 18, 4));
+    const auto height = static_cast<std::int32_t>(LittleEndian(b, 22, 4));
+    auto magnitude = [](std::int32_t v) { return v < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(static_cast<std::int64_t>(v)) : std::uint64_t(v); };
+    return std::pair{magnitude(width), magnitude(height)};
   }
   return std::nullopt;
+}
+
+// Refuses an image of more pixels than a camera frame has, before its
+// pixels are allocated.
+void CheckSize(const std::string& name, std::uint64_t width, std::uint64_t height) {
+  if (width * height > kMaxImagePixels) {
+    throw FileError(name, 0, "declares " + std::to_string(width) + " x " + std::to_string(height) +
+                                 " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
+  }
 }
 
 // A PNG or JPEG cut short (a copy or download that did not finish), said so
@@ -138,6 +167,11 @@ cv::Mat DecodePng(const std::string& bytes, const std::string& name) {
   std::vector<png_bytep> rows;
   bool ok = info != nullptr && PngReadHeader(png, info);
   if (ok) {
+    const std::uint64_t width = png_get_image_width(png, info), height = png_get_image_height(png, info);
+    if (width * height > kMaxImagePixels) {
+      png_destroy_read_struct(&png, &info, nullptr);
+      CheckSize(name, width, height);
+    }
     image.create(static_cast<int>(png_get_image_height(png, info)), static_cast<int>(png_get_image_width(png, info)),
                  CV_8UC3);
     for (int r = 0; r < image.rows; ++r) rows.push_back(image.ptr<png_byte>(r));
@@ -206,6 +240,11 @@ std::optional<cv::Mat> DecodeJpeg(const std::string& bytes, const std::string& n
   cv::Mat image;
   std::vector<JSAMPROW> rows;
   bool ok = JpegReadHeader(&jpeg, &errors, bytes);
+  if (ok && std::uint64_t{jpeg.image_width} * jpeg.image_height > kMaxImagePixels) {
+    const std::uint64_t width = jpeg.image_width, height = jpeg.image_height;
+    jpeg_destroy_decompress(&jpeg);
+    CheckSize(name, width, height);
+  }
   // CMYK and YCCK (print workflows, not cameras) are left to OpenCV, which
   // converts them itself.
   const bool cmyk = ok && (jpeg.jpeg_color_space == JCS_CMYK || jpeg.jpeg_color_space == JCS_YCCK);
@@ -227,17 +266,18 @@ std::optional<cv::Mat> DecodeJpeg(const std::string& bytes, const std::string& n
 cv::Mat ReadImage(const std::filesystem::path& path) {
   const std::string name = path.string();
   const std::string bytes = ReadWholeFile(path, kMaxImageBytes, "an image (PNG, JPEG, ...)");
-  if (const auto size = DeclaredSize(bytes);
-      size && std::uint64_t{size->first} * std::uint64_t{size->second} > kMaxImagePixels) {
-    throw FileError(name, 0, "declares " + std::to_string(size->first) + " x " + std::to_string(size->second) +
-                                 " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
-  }
   if (const auto truncated = TruncationOf(bytes)) {
     throw FileError(name, 0, "is " + *truncated + " (cut short?); expected a whole image");
   }
   if (bytes.starts_with(kPngSignature)) return DecodePng(bytes, name);
   if (IsJpeg(bytes)) {
     if (auto image = DecodeJpeg(bytes, name)) return std::move(*image);
+  } else if (const auto size = DeclaredSize(bytes)) {
+    CheckSize(name, size->first, size->second);
+  } else {
+    // OpenCV's other decoders (TIFF, WebP, JPEG 2000, ...) would allocate
+    // whatever their header declares, up to 2^30 pixels, unchecked here.
+    throw FileError(name, 0, "is not an image catgraph reads; expected PNG, JPEG, PNM (PGM, PPM) or BMP");
   }
   cv::Mat image;
   try {
@@ -246,7 +286,7 @@ cv::Mat ReadImage(const std::filesystem::path& path) {
   } catch (const cv::Exception& e) {
     throw FileError(name, 0, "cannot decode the image: " + e.msg);
   }
-  if (image.empty()) throw FileError(name, 0, "cannot decode the image; expected a PNG, JPEG or another format OpenCV reads");
+  if (image.empty()) throw FileError(name, 0, "cannot decode the image; expected a whole PNG, JPEG, PNM (PGM, PPM) or BMP file");
   return image;
 }
 

@@ -26,19 +26,55 @@ std::string BigEndian32(std::uint32_t v) {
   return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)};
 }
 
-TEST_CASE("an image header declaring 100 000 x 100 000 pixels is refused before decoding", "[io][bad-input][bounds]") {
+// The CRC-32 a PNG chunk ends with (ISO 3309, as zlib's crc32).
+std::uint32_t Crc32(const std::string& bytes) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (const char c : bytes) {
+    crc ^= static_cast<unsigned char>(c);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+std::string PngChunk(const std::string& type, const std::string& data) {
+  return BigEndian32(static_cast<std::uint32_t>(data.size())) + type + data + BigEndian32(Crc32(type + data));
+}
+
+std::string LittleEndian(std::uint32_t v, int bytes) {
+  std::string out;
+  for (int k = 0; k < bytes; ++k) out += static_cast<char>(v >> (8 * k));
+  return out;
+}
+
+TEST_CASE("an image declaring 100 000 x 100 000 pixels is refused before its pixels are allocated",
+          "[io][bad-input][bounds]") {
   const auto dir = testing::TempDir("bounds_image");
-  // PNG: signature, then the IHDR chunk with width and height.
+  // PNG: a well-formed file (checksums right, IDAT and IEND present) whose header
+  // declares the size.
   std::ofstream(dir / "huge.png", std::ios::binary)
-      << std::string("\x89PNG\r\n\x1a\n", 8) << BigEndian32(13) << "IHDR" << BigEndian32(100000) << BigEndian32(100000)
-      << std::string("\x08\x02\x00\x00\x00", 5) << BigEndian32(0);
+      << std::string("\x89PNG\r\n\x1a\n", 8)
+      << PngChunk("IHDR", BigEndian32(100000) + BigEndian32(100000) + std::string("\x08\x02\x00\x00\x00", 5))
+      << PngChunk("IDAT", "") << PngChunk("IEND", "");
   CHECK_THROWS_WITH(ReadImage(dir / "huge.png"), Catch::Contains("huge.png: declares 100000 x 100000 pixels"));
-  // JPEG: start of image, an APP0 segment, then a baseline start of frame
-  // with height 60 000 and width 50 000.
+  // JPEG: start of image, an APP0 segment, a baseline start of frame with
+  // height 60 000 and width 50 000, a start of scan, end of image.
   std::ofstream(dir / "huge.jpg", std::ios::binary)
       << std::string("\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08", 13) << std::string("\xEA\x60", 2)
-      << std::string("\xC3\x50", 2) << std::string("\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 10);
+      << std::string("\xC3\x50", 2) << std::string("\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 10)
+      << std::string("\xFF\xDA\x00\x0C\x03\x01\x00\x02\x11\x03\x11\x00\x3F\x00\xFF\xD9", 16);
   CHECK_THROWS_WITH(ReadImage(dir / "huge.jpg"), Catch::Contains("huge.jpg: declares 50000 x 60000 pixels"));
+  // PGM and BMP (read by OpenCV once the size is checked).
+  std::ofstream(dir / "huge.pgm", std::ios::binary) << "P5\n# a comment\n100000 100000\n255\n" << std::string(16, '\0');
+  CHECK_THROWS_WITH(ReadImage(dir / "huge.pgm"), Catch::Contains("huge.pgm: declares 100000 x 100000 pixels"));
+  std::ofstream(dir / "huge.bmp", std::ios::binary)
+      << "BM" << LittleEndian(70, 4) << LittleEndian(0, 4) << LittleEndian(54, 4) << LittleEndian(40, 4)
+      << LittleEndian(100000, 4) << LittleEndian(static_cast<std::uint32_t>(-100000), 4) << LittleEndian(1, 2)
+      << LittleEndian(24, 2) << std::string(40, '\0');
+  CHECK_THROWS_WITH(ReadImage(dir / "huge.bmp"), Catch::Contains("huge.bmp: declares 100000 x 100000 pixels"));
+  // A format whose size is not checked here (TIFF) is refused by name.
+  std::ofstream(dir / "frame.tif", std::ios::binary) << std::string("II*\0\x08\0\0\0", 8) << std::string(32, '\0');
+  CHECK_THROWS_WITH(ReadImage(dir / "frame.tif"),
+                    Catch::Contains("frame.tif: is not an image catgraph reads; expected PNG, JPEG, PNM"));
   // A header that is fine but a file cut short: refused before the decoder
   // (which would print its own line to stderr) sees it.
   std::ofstream(dir / "cut.png", std::ios::binary)
