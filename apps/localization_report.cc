@@ -113,13 +113,13 @@ plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, d
   plot::Figure figure;
   figure.rows = 2;
   figure.width_px = 1100;
-  figure.height_px = 800;
-  plot::Series changed{"frames seeing a changed region", {}, {}, plot::SeriesStyle::kSegments,
-                       {0.85, 0.55, 0.1, 0.9}, 4.0};
-  plot::Series hypothesis{"best hypothesis", {}, {}, plot::SeriesStyle::kLine, plot::PaletteColor(1), 0.8};
-  plot::Series closed{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
-  plot::Series error{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.0};
-  plot::Series best_error{"best hypothesis (no closure)", {}, {}, plot::SeriesStyle::kMarkers,
+  figure.height_px = 820;
+  plot::Series changed{"frames that see a changed region", {}, {}, plot::SeriesStyle::kSegments,
+                       plot::kChangedRegionColor, 4.0};
+  plot::Series hypothesis{"best hypothesis", {}, {}, plot::SeriesStyle::kLine, plot::kTrajectoryColor, 0.8};
+  plot::Series closed{"visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::kVisualClosureColor, 2.0};
+  plot::Series error = closed;
+  plot::Series best_error{"best hypothesis, no closure", {}, {}, plot::SeriesStyle::kMarkers,
                           {0.6, 0.6, 0.6, 0.6}, 1.0};
   for (const auto& h : r.frames) {
     const double k = h.frame;
@@ -137,25 +137,34 @@ plot::Figure LocalizationFigure(const Dataset& d, const LocalizationResult& r, d
     (h.closure ? error : best_error).x.push_back(k);
     (h.closure ? error : best_error).y.push_back(h.error_m);
   }
-  plot::Series inferred{"odometry-inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(4), 2.0};
+  plot::Series inferred{"odometry-inferred closure", {}, {}, plot::SeriesStyle::kMarkers,
+                        plot::kInferredClosureColor, 2.0};
   for (const auto& c : r.closures) {
     if (c.kind != ClosureKind::kOdometryInferred || std::isnan(c.error_m)) continue;
     inferred.x.push_back(c.frame);
     inferred.y.push_back(c.error_m);
   }
-  plot::Series t_h{"T_h", {0.0, static_cast<double>(r.frames.size())}, {threshold, threshold},
-                   plot::SeriesStyle::kLine, {0.3, 0.3, 0.3, 1.0}, 1.0, true};
-  plot::Axes top;
-  top.title = "Location hypothesis (Eq 4) per frame";
-  top.x_label = "frame";
-  top.y_label = "hypothesis";
+  const double frames = static_cast<double>(r.frames.size());
+  char threshold_label[64];
+  std::snprintf(threshold_label, sizeof threshold_label, "closure threshold T_h = %g", threshold);
+  plot::Series t_h{threshold_label, {0.0, frames}, {threshold, threshold}, plot::SeriesStyle::kLine,
+                   {0.3, 0.3, 0.3, 1.0}, 1.0, true};
+  // Both panels span the same frames, so that they line up.
+  auto frame_axes = [frames](std::string title, std::string y_label) {
+    plot::Axes axes;
+    axes.title = std::move(title);
+    axes.x_label = "frame";
+    axes.y_label = std::move(y_label);
+    axes.x_min = 0.0;
+    axes.x_max = std::max(frames - 1.0, 1.0);
+    return axes;
+  };
+  plot::Axes top = frame_axes("Best location hypothesis per frame: particle weight near the best place",
+                              "hypothesis (0 to 1)");
   top.y_min = -0.08;
   top.y_max = 1.05;
   top.series = {changed, hypothesis, t_h, closed};
-  plot::Axes bottom;
-  bottom.title = "Error against ground truth";
-  bottom.x_label = "frame";
-  bottom.y_label = "error (m)";
+  plot::Axes bottom = frame_axes("Distance from the true place", "error (m), log(1 + error) scale");
   bottom.y_scale = plot::Scale::kSymlog;
   changed.y.assign(changed.y.size(), 0.0);
   bottom.series = {changed, best_error, error};

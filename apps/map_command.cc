@@ -18,7 +18,7 @@
 #include "apps/commands.h"
 #include "apps/localization_report.h"
 #include "apps/map_outcome.h"
-#include "apps/plot/figure.h"
+#include "apps/plot/graph_figure.h"
 #include "backend/evaluation.h"
 #include "backend/graph/trajectory.h"
 #include "backend/io/atomic_file.h"
@@ -40,65 +40,44 @@ struct MapCommandOptions {
   int feedback_reruns = kDefaultFeedbackReruns;
 };
 
-// `estimate` moved so that its first pose is the truth's first pose, for
-// drawing both in one frame; unchanged without truth.
-Trajectory2 Anchored(const Trajectory2& estimate, const Trajectory2& truth) {
-  if (truth.empty() || estimate.empty()) return estimate;
-  const Pose2 move = truth.begin()->second * estimate.begin()->second.Inverse();
-  Trajectory2 anchored;
-  for (const auto& [id, pose] : estimate) anchored.emplace_hint(anchored.end(), id, move * pose);
-  return anchored;
+// `estimate` moved by the rigid transform the ATE aligns it with, so that
+// the picture shows the error the report gives; unchanged without truth.
+Trajectory2 Aligned(const Trajectory2& estimate, const Trajectory2& truth) {
+  if (truth.empty() || estimate.size() < 2) return estimate;
+  const Pose2 align = AlignmentOnto(estimate, truth);
+  Trajectory2 aligned;
+  for (const auto& [id, pose] : estimate) aligned.emplace_hint(aligned.end(), id, align * pose);
+  return aligned;
 }
 
-plot::Series Path(const std::string& label, const Trajectory2& poses, plot::Color color, double width) {
-  plot::Series s{label, {}, {}, plot::SeriesStyle::kLine, color, width};
-  for (const auto& [id, p] : poses) {
-    s.x.push_back(p.x());
-    s.y.push_back(p.y());
-  }
-  return s;
-}
-
-// The CAT-Graph+ paper's Fig. 10: odometry alone beside the corrected map,
-// with the accepted visual closures as solid red lines and the accepted
-// inferred ones dashed black; rejected closures faint. Both anchored at the
-// first true pose, over the floor plan when the dataset has one.
+// The CAT-Graph+ paper's Fig. 10: odometry alone beside the corrected map
+// with its loop closures (graph_figure.h's colours and thinning), each
+// aligned to the ground truth as the ATE is, over the floor plan when the
+// dataset has one.
 plot::Figure MapFigure(const Dataset& d, const PoseGraph2& front, const PoseGraph2& corrected,
-                       const std::vector<ClosureDecision>& decisions, const Trajectory2& truth) {
-  const plot::Series walls = WallsSeries(d, "", {0.55, 0.55, 0.55, 1.0}, 0.6);
-  plot::Series truth_path = Path("ground truth", truth, {0.2, 0.6, 0.2, 0.6}, 0.8);
-  auto panel = [&](const std::string& title, const Trajectory2& poses, bool closures) {
+                       const Trajectory2& truth) {
+  const plot::Series walls = WallsSeries(d, "", plot::kWallColor, 0.6);
+  auto panel = [&](const std::string& title, const PoseGraph2& graph, bool closures) {
     plot::Axes axes;
     axes.title = title;
     axes.x_label = "x (m)";
     axes.y_label = "y (m)";
     axes.equal_aspect = true;
     if (!walls.x.empty()) axes.series.push_back(walls);
-    if (!truth.empty()) axes.series.push_back(truth_path);
-    axes.series.push_back(Path("trajectory", poses, {0.0, 0.45, 0.70, 1.0}, 1.2));
-    if (!closures) return axes;
-    plot::Series visual{"visual closure", {}, {}, plot::SeriesStyle::kSegments, {0.84, 0.1, 0.1, 0.9}, 0.8};
-    plot::Series inferred{"inferred closure", {}, {}, plot::SeriesStyle::kSegments, {0.0, 0.0, 0.0, 0.9}, 0.8, true};
-    plot::Series rejected{"rejected closure", {}, {}, plot::SeriesStyle::kSegments, {0.9, 0.6, 0.0, 0.5}, 0.6, true};
-    for (const ClosureDecision& c : decisions) {
-      plot::Series& s = !c.accepted ? rejected : c.kind == ClosureKind::kOdometryInferred ? inferred : visual;
-      const Pose2& a = poses.at(c.from);
-      const Pose2& b = poses.at(c.to);
-      s.x.insert(s.x.end(), {a.x(), b.x()});
-      s.y.insert(s.y.end(), {a.y(), b.y()});
+    const Trajectory2 poses = Aligned(TrajectoryOf(graph), truth);
+    if (closures) {
+      for (plot::Series& s : plot::ClosureSeries(graph, poses)) axes.series.push_back(std::move(s));
     }
-    for (plot::Series* s : {&rejected, &visual, &inferred}) {
-      s->label += " (" + std::to_string(s->x.size() / 2) + ")";
-      axes.series.push_back(*s);
-    }
+    if (!truth.empty()) axes.series.push_back(plot::PathSeries("ground truth", truth, plot::kTruthColor, 0.8));
+    axes.series.push_back(plot::PathSeries(truth.empty() ? "trajectory" : "trajectory (aligned to the truth)", poses,
+                                           plot::kTrajectoryColor, 1.2));
     return axes;
   };
   plot::Figure figure;
   figure.cols = 2;
-  figure.width_px = 1800;
-  figure.height_px = 900;
-  figure.axes = {panel("odometry alone", Anchored(TrajectoryOf(front), truth), false),
-                 panel("corrected map", Anchored(TrajectoryOf(corrected), truth), true)};
+  figure.width_px = 1200;
+  figure.height_px = 680;
+  figure.axes = {panel("odometry alone", front, false), panel("corrected map", corrected, true)};
   return figure;
 }
 
@@ -273,7 +252,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   report["closures"] = closures;
   WriteFileAtomically(dir / "report.json", [&](std::ostream& f) { f << report.dump(1) << '\n'; });
 
-  const plot::Figure map = MapFigure(d, r.graph, corrected, result.closures, truth);
+  const plot::Figure map = MapFigure(d, r.graph, corrected, truth);
   plot::SaveFigure(map, dir / "map.png");
   plot::SaveFigure(map, dir / "map.svg");
 
@@ -298,18 +277,31 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     headline << "<tr><td>ATE (RMSE, aligned)</td><td>odometry " << Number(m.ate_odometry->ate_m.rmse, "%.3f")
              << " m &rarr; corrected " << Number(m.ate_corrected->ate_m.rmse, "%.3f") << " m</td></tr>\n";
   }
+  std::ostringstream files;
+  auto file = [&files](const std::string& name, const std::string& what) {
+    files << "<li><a href=\"" << name << "\">" << name << "</a>: " << what << "</li>\n";
+  };
+  file("corrected.g2o", "the corrected graph, every closure with its decision and weight");
+  file("corrected_accepted.g2o", "the same without the rejected closures");
+  file("trajectory.tum", "the corrected trajectory at the frames' times (TUM format)");
+  if (!truth.empty()) {
+    file("groundtruth.tum", "the ground truth at the same times: evo_ape tum groundtruth.tum trajectory.tum -a");
+  }
+  file("report.json", "the numbers above and every closure");
+  file("closures.json", "the front end's closures");
+  file("hypotheses.csv", "the front end's hypothesis per frame");
+  file("graph.g2o", "the front end's graph, before the back end");
+  for (const char* picture : {"map.png", "map.svg", "localization.png", "localization.svg"}) file(picture, "the figure");
   WriteFileAtomically(dir / "index.html", [&](std::ostream& f) {
     f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>catgraph map: "
       << HtmlEscape(o.front.dataset) << "</title>\n<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
-      << "img{max-width:100%}td{padding:2px 12px}</style></head><body>\n<h1>catgraph map</h1>\n<p>"
+      << "img{max-width:100%}td{padding:2px 12px}body,td{font-size:16px}</style></head><body>\n<h1>catgraph map</h1>\n<p>"
       << HtmlEscape(o.front.dataset) << ": " << d.frames.size() << " frames; " << HtmlEscape(o.method)
       << " back end, " << HtmlEscape(o.hierarchy) << " hierarchy.</p>\n<table>\n" << headline.str() << "</table>\n"
       << "<h2>Map (Fig. 10)</h2>\n<img src=\"map.svg\" alt=\"odometry alone and the corrected map\">\n"
       << "<h2>Hypothesis and closure error per frame (Figs. 7, 8, 11)</h2>\n"
       << "<img src=\"localization.svg\" alt=\"hypothesis and closure error per frame\">\n"
-      << "<p>Files: corrected.g2o (with switches), corrected_accepted.g2o (rejected closures removed), "
-      << "trajectory.tum and groundtruth.tum (frame times; evo_ape tum groundtruth.tum trajectory.tum -a), "
-      << "report.json, closures.json, hypotheses.csv, graph.g2o (the front end's graph).</p>\n"
+      << "<h2>Files</h2>\n<ul>\n" << files.str() << "</ul>\n"
       << "</body></html>\n";
   });
 

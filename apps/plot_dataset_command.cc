@@ -45,7 +45,8 @@ plot::Figure PlanFigure(const Dataset& d, const std::string& title) {
   axes.equal_aspect = true;
   for (const auto& r : d.meta.changed_regions) {
     plot::Series s{r.name.empty() ? "changed region" : r.name, {}, {}, plot::SeriesStyle::kSegments,
-                   {0.2, 0.45, 0.95, 0.35}, 7.0};
+                   plot::Color{plot::kChangedRegionColor.r, plot::kChangedRegionColor.g, plot::kChangedRegionColor.b, 0.4},
+                   7.0};
     AddPolygon(s, r.polygon);
     axes.series.push_back(std::move(s));
   }

@@ -63,9 +63,10 @@ void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
   // The paper's Fig. 9: matched template against query frame; the matches
   // accepted at the best threshold, and the truth (the nearest template).
   plot::Series all{"best template", {}, {}, plot::SeriesStyle::kMarkers, {0.6, 0.6, 0.6, 0.7}, 1.5};
-  plot::Series accepted{"accepted at the best threshold", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(2), 2.5};
-  plot::Series changed{"query frames seeing a changed region", {}, {}, plot::SeriesStyle::kSegments,
-                       {0.85, 0.55, 0.1, 0.9}, 4.0};
+  plot::Series accepted{"SAD match accepted at the best threshold", {}, {}, plot::SeriesStyle::kMarkers,
+                        {0.0, 0.0, 0.0, 0.8}, 2.5};
+  plot::Series changed{"query frames that see a changed region", {}, {}, plot::SeriesStyle::kSegments,
+                       plot::kChangedRegionColor, 4.0};
   int n_changed = 0, accepted_changed = 0, n_accepted = 0;
   for (const auto& m : matches) {
     const bool in_changed = d.frames[static_cast<std::size_t>(m.query_frame)].changed;
@@ -86,8 +87,9 @@ void RunSadMatch(SadCommandOptions& o, std::ostream& out) {
   }
   // Beside it, from a `catgraph localize` output: the frames CAT-Graph's
   // visual closures and CAT-Graph+'s inferred closures matched.
-  plot::Series visual{"CAT-Graph visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(1), 1.5};
-  plot::Series inferred{"CAT-Graph+ inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::PaletteColor(4), 1.5};
+  plot::Series visual{"CAT-Graph visual closure", {}, {}, plot::SeriesStyle::kMarkers, plot::kVisualClosureColor, 1.5};
+  plot::Series inferred{"CAT-Graph+ inferred closure", {}, {}, plot::SeriesStyle::kMarkers, plot::kInferredClosureColor,
+                        1.5};
   if (!o.localization.empty()) {
     const std::filesystem::path file = std::filesystem::path(o.localization) / "closures.json";
     std::ifstream in(file);

@@ -57,6 +57,44 @@ Pose3 RigidTransform(const Eigen::Matrix4d& t) {
   return {t.block<3, 1>(0, 3), Eigen::Quaterniond(Eigen::Matrix3d(t.block<3, 3>(0, 0)))};
 }
 
+// (estimate, truth) pose pairs by id; throws as EvaluateTrajectory documents.
+template <typename PoseT>
+std::vector<std::pair<PoseT, PoseT>> PosePairs(const Trajectory<PoseT>& estimate, const Trajectory<PoseT>& truth) {
+  if (estimate.size() < 2) {
+    throw std::invalid_argument("trajectory evaluation needs at least 2 poses, the estimate has " +
+                                std::to_string(estimate.size()));
+  }
+  std::vector<std::pair<PoseT, PoseT>> pairs;
+  pairs.reserve(estimate.size());
+  for (const auto& [id, pose] : estimate) {
+    const auto it = truth.find(id);
+    if (it == truth.end()) {
+      throw std::invalid_argument("pose " + std::to_string(id.value()) +
+                                  " of the estimate has no ground truth (the truth has " +
+                                  std::to_string(truth.size()) + " poses)");
+    }
+    pairs.emplace_back(pose, it->second);
+  }
+  return pairs;
+}
+
+// The rigid transform taking the estimate's positions onto the truth's with
+// the least squared error (Umeyama 1991, no scale).
+template <typename PoseT>
+PoseT AlignmentOf(const std::vector<std::pair<PoseT, PoseT>>& pairs) {
+  constexpr int kDim = std::is_same_v<PoseT, Pose2> ? 2 : 3;
+  // Dynamic sizes: GCC 12 reports a false stringop-overread inside Eigen's
+  // umeyama() for fixed-row matrices.
+  const auto n = static_cast<Eigen::Index>(pairs.size());
+  Eigen::MatrixXd est(kDim, n), gt(kDim, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    est.col(k) = Position(pairs[static_cast<std::size_t>(k)].first);
+    gt.col(k) = Position(pairs[static_cast<std::size_t>(k)].second);
+  }
+  const Eigen::MatrixXd transform = Eigen::umeyama(est, gt, /*with_scaling=*/false);
+  return RigidTransform(Eigen::Matrix<double, kDim + 1, kDim + 1>(transform));
+}
+
 }  // namespace
 
 ErrorStatistics StatisticsOf(std::vector<double> errors) {
@@ -83,38 +121,20 @@ ErrorStatistics StatisticsOf(std::vector<double> errors) {
 }
 
 template <typename PoseT>
+PoseT AlignmentOnto(const Trajectory<PoseT>& estimate, const Trajectory<PoseT>& truth) {
+  return AlignmentOf(PosePairs(estimate, truth));
+}
+
+template Pose2 AlignmentOnto(const Trajectory2&, const Trajectory2&);
+template Pose3 AlignmentOnto(const Trajectory3&, const Trajectory3&);
+
+template <typename PoseT>
 TrajectoryEvaluation EvaluateTrajectory(const Trajectory<PoseT>& estimate,
                                         const Trajectory<PoseT>& truth) {
-  constexpr int kDim = std::is_same_v<PoseT, Pose2> ? 2 : 3;
-  // Dynamic sizes: GCC 12 reports a false stringop-overread inside Eigen's
-  // umeyama() for fixed-row matrices.
-  using Positions = Eigen::MatrixXd;
-  if (estimate.size() < 2) {
-    throw std::invalid_argument("trajectory evaluation needs at least 2 poses, the estimate has " +
-                                std::to_string(estimate.size()));
-  }
-  std::vector<std::pair<PoseT, PoseT>> pairs;  // (estimate, truth), by id
-  pairs.reserve(estimate.size());
-  for (const auto& [id, pose] : estimate) {
-    const auto it = truth.find(id);
-    if (it == truth.end()) {
-      throw std::invalid_argument("pose " + std::to_string(id.value()) +
-                                  " of the estimate has no ground truth (the truth has " +
-                                  std::to_string(truth.size()) + " poses)");
-    }
-    pairs.emplace_back(pose, it->second);
-  }
-  const auto n = static_cast<Eigen::Index>(pairs.size());
-  Positions est(kDim, n), gt(kDim, n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    est.col(k) = Position(pairs[static_cast<std::size_t>(k)].first);
-    gt.col(k) = Position(pairs[static_cast<std::size_t>(k)].second);
-  }
-
+  const std::vector<std::pair<PoseT, PoseT>> pairs = PosePairs(estimate, truth);
   TrajectoryEvaluation result;
   result.poses = pairs.size();
-  const Eigen::MatrixXd transform = Eigen::umeyama(est, gt, /*with_scaling=*/false);
-  const PoseT align = RigidTransform(Eigen::Matrix<double, kDim + 1, kDim + 1>(transform));
+  const PoseT align = AlignmentOf(pairs);
   const PoseT anchor = pairs.front().second * pairs.front().first.Inverse();
   std::vector<double> ate, anchored, rpe_t, rpe_r;
   for (const auto& [e, g] : pairs) {

@@ -52,6 +52,13 @@ TrajectoryEvaluation EvaluateTrajectory(const Trajectory<PoseT>& estimate,
                                         const Trajectory<PoseT>& truth);
 TrajectoryEvaluation EvaluateTrajectory(const AnyTrajectory& estimate, const AnyTrajectory& truth);
 
+// The rigid transform T (no scale) for which T * estimate's positions lie
+// closest to the truth's in the least-squares sense: the alignment behind
+// the ATE above, for drawing an estimate where the ATE measured it. Same
+// requirements and errors as EvaluateTrajectory.
+template <typename PoseT>
+PoseT AlignmentOnto(const Trajectory<PoseT>& estimate, const Trajectory<PoseT>& truth);
+
 // What the back end decided about one loop closure of its output.
 struct ClosureOutcome {
   PoseId from, to;

@@ -122,10 +122,69 @@ void ShowText(cairo_t* cr, double x, double y, const std::string& text, double a
   cairo_show_text(cr, text.c_str());
 }
 
-void DrawAxes(cairo_t* cr, const Axes& axes, double x0, double y0, double w, double h) {
-  // Plot box in device units.
+// The legend's entries laid out left to right below the x label, wrapping
+// at `width`: each entry's top-left corner, relative to the legend's.
+struct LegendLayout {
+  std::vector<const Series*> entries;
+  std::vector<std::pair<double, double>> at;
+  double height = 0.0;
+};
+
+constexpr double kLegendRow = kFontSize + 6.0, kLegendKey = 30.0, kLegendGap = 18.0;
+
+LegendLayout LayOutLegend(cairo_t* cr, const Axes& axes, double width) {
+  LegendLayout layout;
+  if (!axes.legend) return layout;
+  for (const Series& s : axes.series) {
+    if (!s.label.empty()) layout.entries.push_back(&s);
+  }
+  if (layout.entries.empty()) return layout;
+  cairo_set_font_size(cr, kFontSize);
+  double x = 0.0, y = 0.0;
+  for (const Series* s : layout.entries) {
+    const double entry_w = kLegendKey + 4.0 + TextWidth(cr, s->label);
+    if (x > 0.0 && x + entry_w > width) {
+      x = 0.0;
+      y += kLegendRow;
+    }
+    layout.at.emplace_back(x, y);
+    x += entry_w + kLegendGap;
+  }
+  layout.height = y + kLegendRow + 4.0;
+  return layout;
+}
+
+void DrawLegend(cairo_t* cr, const LegendLayout& layout, double left, double top) {
+  for (std::size_t k = 0; k < layout.entries.size(); ++k) {
+    const Series& s = *layout.entries[k];
+    const double x = left + layout.at[k].first, y = top + layout.at[k].second + kLegendRow / 2.0;
+    SetColor(cr, Color{s.color.r, s.color.g, s.color.b, std::max(s.color.a, 0.8)});
+    cairo_set_line_width(cr, std::max(s.width_pt, 1.2));
+    const double dash[] = {4.0 * s.width_pt, 3.0 * s.width_pt};
+    cairo_set_dash(cr, dash, s.dashed ? 2 : 0, 0.0);
+    if (s.style == SeriesStyle::kMarkers) {
+      cairo_arc(cr, x + kLegendKey / 2.0, y, 3.0, 0.0, 2.0 * std::numbers::pi);
+      cairo_fill(cr);
+    } else {
+      cairo_move_to(cr, x, y);
+      cairo_line_to(cr, x + kLegendKey, y);
+      cairo_stroke(cr);
+    }
+    cairo_set_dash(cr, nullptr, 0, 0.0);
+    SetColor(cr, {0.1, 0.1, 0.1});
+    ShowText(cr, x + kLegendKey + 4.0, y + 4.0, s.label);
+  }
+}
+
+// `legend_h`: the height kept below the x label for the legend, the same
+// for every panel of a row so that their plot boxes match.
+void DrawAxes(cairo_t* cr, const Axes& axes, const LegendLayout& legend, double legend_h, double x0, double y0,
+              double w, double h) {
+  // Plot box in device units; the legend sits below the x label, outside
+  // the data.
   const double left = x0 + kMarginLeft, top = y0 + kMarginTop;
-  double pw = w - kMarginLeft - kMarginRight, ph = h - kMarginTop - kMarginBottom;
+  const double pw = w - kMarginLeft - kMarginRight;
+  const double ph = h - kMarginTop - kMarginBottom - legend_h;
   Range xr = ScaledRange(axes, true), yr = ScaledRange(axes, false);
   if (axes.equal_aspect) {
     const double sx = pw / xr.Span(), sy = ph / yr.Span();
@@ -220,38 +279,7 @@ void DrawAxes(cairo_t* cr, const Axes& axes, double x0, double y0, double w, dou
   }
   cairo_restore(cr);
 
-  // Legend, top right inside the box.
-  std::vector<const Series*> entries;
-  for (const Series& s : axes.series) {
-    if (!s.label.empty()) entries.push_back(&s);
-  }
-  if (!axes.legend || entries.empty()) return;
-  double text_w = 0.0;
-  for (const Series* s : entries) text_w = std::max(text_w, TextWidth(cr, s->label));
-  const double row = kFontSize + 4.0, box_w = text_w + 40.0;
-  const double bx = left + pw - box_w - 6.0, by = top + 6.0;
-  SetColor(cr, {1.0, 1.0, 1.0, 0.85});
-  cairo_rectangle(cr, bx, by, box_w, row * static_cast<double>(entries.size()) + 6.0);
-  cairo_fill(cr);
-  for (std::size_t k = 0; k < entries.size(); ++k) {
-    const Series& s = *entries[k];
-    const double y = by + 3.0 + row * (static_cast<double>(k) + 0.5);
-    SetColor(cr, s.color);
-    cairo_set_line_width(cr, s.width_pt);
-    const double dash[] = {4.0 * s.width_pt, 3.0 * s.width_pt};
-    cairo_set_dash(cr, dash, s.dashed ? 2 : 0, 0.0);
-    if (s.style == SeriesStyle::kMarkers) {
-      cairo_arc(cr, bx + 18.0, y, 3.0, 0.0, 2.0 * std::numbers::pi);
-      cairo_fill(cr);
-    } else {
-      cairo_move_to(cr, bx + 6.0, y);
-      cairo_line_to(cr, bx + 30.0, y);
-      cairo_stroke(cr);
-    }
-    cairo_set_dash(cr, nullptr, 0, 0.0);
-    SetColor(cr, {0.1, 0.1, 0.1});
-    ShowText(cr, bx + 34.0, y + 4.0, s.label);
-  }
+  DrawLegend(cr, legend, left, top + ph + kMarginBottom - 4.0);
 }
 
 void Draw(cairo_t* cr, const Figure& figure) {
@@ -261,9 +289,17 @@ void Draw(cairo_t* cr, const Figure& figure) {
   const double title_h = figure.title.empty() ? 0.0 : 28.0;
   const double w = static_cast<double>(figure.width_px) / figure.cols;
   const double h = (static_cast<double>(figure.height_px) - title_h) / figure.rows;
+  std::vector<LegendLayout> legends;
+  std::vector<double> legend_h(static_cast<std::size_t>(figure.rows), 0.0);
   for (std::size_t k = 0; k < figure.axes.size(); ++k) {
-    const int r = static_cast<int>(k) / figure.cols, c = static_cast<int>(k) % figure.cols;
-    DrawAxes(cr, figure.axes[k], c * w, title_h + r * h, w, h);
+    legends.push_back(LayOutLegend(cr, figure.axes[k], w - kMarginLeft - kMarginRight));
+    double& row_h = legend_h[k / static_cast<std::size_t>(figure.cols)];
+    row_h = std::max(row_h, legends.back().height);
+  }
+  for (std::size_t k = 0; k < figure.axes.size(); ++k) {
+    const std::size_t r = k / static_cast<std::size_t>(figure.cols), c = k % static_cast<std::size_t>(figure.cols);
+    DrawAxes(cr, figure.axes[k], legends[k], legend_h[r], static_cast<double>(c) * w,
+             title_h + static_cast<double>(r) * h, w, h);
   }
   if (!figure.title.empty()) {
     SetColor(cr, {0.0, 0.0, 0.0});

@@ -22,6 +22,21 @@ struct Color {
 // A colour-blind-safe qualitative palette (Okabe & Ito 2008); wraps around.
 Color PaletteColor(int index);
 
+// What every catgraph figure draws in the same colour (from the palette
+// above): a trajectory blue and its ground truth dark grey; accepted visual
+// loop closures bluish green, accepted odometry-inferred ones orange,
+// accepted closures of another or unknown kind sky blue; rejected closures
+// vermillion (dashed); frames that see a changed region reddish purple.
+inline constexpr Color kTrajectoryColor{0.000, 0.447, 0.698};
+inline constexpr Color kTruthColor{0.25, 0.25, 0.25, 0.7};
+inline constexpr Color kOdometryColor{0.55, 0.55, 0.55};
+inline constexpr Color kVisualClosureColor{0.000, 0.620, 0.451};
+inline constexpr Color kInferredClosureColor{0.902, 0.624, 0.000};
+inline constexpr Color kOtherClosureColor{0.337, 0.706, 0.914};
+inline constexpr Color kRejectedClosureColor{0.835, 0.369, 0.000};
+inline constexpr Color kChangedRegionColor{0.800, 0.475, 0.655};
+inline constexpr Color kWallColor{0.6, 0.6, 0.6};
+
 enum class SeriesStyle { kLine, kSegments, kMarkers };
 enum class Scale {
   kLinear,
@@ -44,7 +59,7 @@ struct Axes {
   Scale x_scale = Scale::kLinear, y_scale = Scale::kLinear;
   std::optional<double> x_min, x_max, y_min, y_max;  // unset: from the data
   bool equal_aspect = false;
-  bool legend = true;
+  bool legend = true;  // below the x label, outside the data
   std::vector<Series> series;
 };
 

@@ -1,51 +1,84 @@
 #include "apps/plot/graph_figure.h"
 
-#include "backend/graph/trajectory.h"
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <utility>
 
 namespace catgraph::plot {
-namespace {
 
-Series Segments(const std::string& label, const Color& color) {
-  Series s;
-  s.label = label;
-  s.style = SeriesStyle::kSegments;
-  s.color = color;
-  s.width_pt = 0.8;
+Series PathSeries(std::string label, const Trajectory2& poses, Color color, double width_pt) {
+  Series s{std::move(label), {}, {}, SeriesStyle::kLine, color, width_pt};
+  for (const auto& [id, p] : poses) {
+    s.x.push_back(p.x());
+    s.y.push_back(p.y());
+  }
   return s;
 }
 
 template <typename PoseT>
-Axes Build(const PoseGraph<PoseT>& graph, const std::string& title) {
-  const Trajectory2 poses = ConvertTrajectory<Pose2>(TrajectoryOf(graph));
-  Series odometry = Segments("odometry", {0.45, 0.45, 0.45});
-  Series accepted = Segments("accepted closure", {0.0, 0.62, 0.45});
-  Series rejected = Segments("rejected closure", {0.84, 0.15, 0.16});
-  rejected.dashed = true;
+std::vector<Series> ClosureSeries(const PoseGraph<PoseT>& graph, const Trajectory2& at) {
+  struct Group {
+    std::string label;
+    Color color;
+    bool dashed = false;
+    std::vector<const Constraint<PoseT>*> closures;
+  };
+  Group visual{"visual closure", kVisualClosureColor, false, {}};
+  Group inferred{"inferred closure", kInferredClosureColor, false, {}};
+  Group other{"accepted closure", kOtherClosureColor, false, {}};
+  Group rejected{"rejected closure", kRejectedClosureColor, true, {}};
   for (const auto& c : graph.constraints) {
-    Series& s = c.IsBetweenConsecutivePoses() ? odometry
-                : graph.IsAccepted(c) ? accepted
-                                                                                : rejected;
-    const Pose2& a = poses.at(c.from);
-    const Pose2& b = poses.at(c.to);
-    s.x.insert(s.x.end(), {a.x(), b.x()});
-    s.y.insert(s.y.end(), {a.y(), b.y()});
+    if (c.IsBetweenConsecutivePoses()) continue;
+    Group& g = !graph.IsAccepted(c)                       ? rejected
+               : c.kind == ClosureKind::kVisual           ? visual
+               : c.kind == ClosureKind::kOdometryInferred ? inferred
+                                                          : other;
+    g.closures.push_back(&c);
   }
+  auto pose = [&at](PoseId id) -> const Pose2& {
+    const auto it = at.find(id);
+    if (it == at.end()) throw std::invalid_argument("no position to draw pose " + std::to_string(id.value()) + " at");
+    return it->second;
+  };
+  std::vector<Series> series;
+  for (Group* g : {&rejected, &visual, &inferred, &other}) {
+    const std::size_t n = g->closures.size();
+    if (n == 0) continue;
+    // Every step-th closure, so that at most kMaxDrawnClosures are drawn.
+    const std::size_t step = (n + kMaxDrawnClosures - 1) / kMaxDrawnClosures;
+    Series s{g->label + " (" + std::to_string(n) + (step > 1 ? ", 1 in " + std::to_string(step) + " drawn)" : ")"),
+             {},
+             {},
+             SeriesStyle::kSegments,
+             Color{g->color.r, g->color.g, g->color.b, 0.55},
+             0.7,
+             g->dashed};
+    for (std::size_t k = 0; k < n; k += step) {
+      const Pose2& a = pose(g->closures[k]->from);
+      const Pose2& b = pose(g->closures[k]->to);
+      s.x.insert(s.x.end(), {a.x(), b.x()});
+      s.y.insert(s.y.end(), {a.y(), b.y()});
+    }
+    series.push_back(std::move(s));
+  }
+  return series;
+}
+
+template std::vector<Series> ClosureSeries(const PoseGraph2&, const Trajectory2&);
+template std::vector<Series> ClosureSeries(const PoseGraph3&, const Trajectory2&);
+
+Axes GraphAxes(const AnyPoseGraph& any, const std::string& title) {
+  const Trajectory2 poses =
+      std::visit([](const auto& g) { return ConvertTrajectory<Pose2>(TrajectoryOf(g)); }, any);
   Axes axes;
   axes.title = title;
   axes.x_label = "x (m)";
   axes.y_label = "y (m)";
   axes.equal_aspect = true;
-  for (Series* s : {&odometry, &accepted, &rejected}) {
-    s->label += " (" + std::to_string(s->x.size() / 2) + ")";
-    axes.series.push_back(std::move(*s));
-  }
+  axes.series = std::visit([&poses](const auto& g) { return ClosureSeries(g, poses); }, any);
+  axes.series.push_back(PathSeries("trajectory", poses, kTrajectoryColor, 1.0));
   return axes;
-}
-
-}  // namespace
-
-Axes GraphAxes(const AnyPoseGraph& graph, const std::string& title) {
-  return std::visit([&title](const auto& g) { return Build(g, title); }, graph);
 }
 
 Figure GraphFigure(const AnyPoseGraph& graph, const std::string& title) {

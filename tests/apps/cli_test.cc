@@ -25,6 +25,7 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
+#include "apps/plot/figure.h"
 #include "apps/sweep.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/dataset.h"
@@ -602,7 +603,21 @@ TEST_CASE("simulate lists and prints its scenarios and writes a dataset that plo
   const Result plot = Run({"plot-dataset", (dir / "data").string(), "-o", (dir / "plan.png").string(),
                            "--pair-at", "4,1.2", "--pair-output", (dir / "pair.png").string()});
   REQUIRE(plot.status == 0);
-  CHECK(std::filesystem::file_size(dir / "plan.png") > 20000);
+  // The plan is drawn: lines over a good part of the picture, and the
+  // changed region's band in the figures' change colour (translucent over
+  // white).
+  const cv::Mat3b plan = cv::imread((dir / "plan.png").string(), cv::IMREAD_COLOR);
+  REQUIRE(!plan.empty());
+  int drawn = 0, change_band = 0;
+  const auto mixed = [](double c) { return 255.0 - 0.4 * (255.0 - 255.0 * c); };
+  const cv::Vec3d band(mixed(plot::kChangedRegionColor.b), mixed(plot::kChangedRegionColor.g),
+                       mixed(plot::kChangedRegionColor.r));
+  for (const cv::Vec3b& p : cv::Mat_<cv::Vec3b>(plan)) {
+    drawn += std::min({p[0], p[1], p[2]}) < 200 ? 1 : 0;
+    change_band += cv::norm(cv::Vec3d(p[0], p[1], p[2]) - band, cv::NORM_INF) < 12.0 ? 1 : 0;
+  }
+  CHECK(drawn > static_cast<int>(plan.total() / 50));
+  CHECK(change_band > 1000);
   CHECK(std::filesystem::file_size(dir / "pair.png") > 20000);
   // A scenario file of the user's, with a mistake, is named with its line.
   std::ofstream(dir / "mine.yaml") << print.out << "extra_key: 1\n";

@@ -56,6 +56,27 @@ TEST_CASE("a rigidly moved copy of the truth has zero ATE and zero RPE, in 2D an
   CHECK(e3.rpe_rotation_rad.max == Approx(0.0).margin(1e-9));
 }
 
+TEST_CASE("the alignment of a rigidly moved copy is the inverse move, in 2D and 3D", "[evaluation]") {
+  std::mt19937_64 rng(5);
+  const auto truth2 = RandomTrajectory<Pose2>(40, [&] { return testing::RandomPose2(rng); });
+  const Pose2 move2 = testing::RandomPose2(rng);
+  Trajectory2 est2;
+  for (const auto& [id, p] : truth2) est2[id] = move2 * p;
+  const Pose2 undo2 = AlignmentOnto(est2, truth2) * move2;  // the identity
+  CHECK(undo2.x() == Approx(0.0).margin(1e-9));
+  CHECK(undo2.y() == Approx(0.0).margin(1e-9));
+  CHECK(undo2.theta() == Approx(0.0).margin(1e-9));
+
+  const auto truth3 = RandomTrajectory<Pose3>(40, [&] { return testing::RandomPose3(rng); });
+  const Pose3 move3 = testing::RandomPose3(rng);
+  Trajectory3 est3;
+  for (const auto& [id, p] : truth3) est3[id] = move3 * p;
+  const Pose3 undo3 = AlignmentOnto(est3, truth3) * move3;
+  CHECK(undo3.translation().norm() == Approx(0.0).margin(1e-9));
+  CHECK(RotationAngle(undo3.rotation()) == Approx(0.0).margin(1e-9));
+  CHECK_THROWS_AS(AlignmentOnto(Trajectory2{{PoseId(0), Pose2()}}, truth2), std::invalid_argument);
+}
+
 TEST_CASE("ATE after the optimal alignment is never above the anchored RMSE", "[evaluation]") {
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.3);
