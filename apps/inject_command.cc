@@ -6,9 +6,11 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "backend/chi_square.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/output_directory.h"
+#include "backend/pose_graph_optimizer.h"
 #include "simulation/outlier_injection.h"
 
 namespace catgraph {
@@ -20,7 +22,7 @@ struct InjectOptions {
   std::string policy = "random";
   std::vector<double> information;
   bool switchable = false;
-  double switch_prior_information = 1.0;
+  double switch_prior_information = 0.0;  // 0: the optimiser's default gate
   OutlierOptions outliers;
   int groups = -1;  // --groups; -1: --outliers gives the total
 };
@@ -63,13 +65,20 @@ void RunInject(InjectOptions o, std::ostream& out) {
   if (!o.information.empty()) o.outliers.information = InformationFromValues(o.information, dim);
   const std::vector<InjectedClosure> injected = InjectOutliers(graph, o.outliers);
   if (o.switchable) {
-    if (!(o.switch_prior_information > 0.0)) {
-      throw std::invalid_argument("--switch-prior-information must be > 0");
+    if (!(o.switch_prior_information >= 0.0)) {
+      throw std::invalid_argument("--switch-prior-information must be > 0 (or 0 for the optimiser's gate)");
     }
+    // By default the priors carry the chi2 gate catgraph's optimiser sets
+    // (docs/backend.md): a file's switch priors are kept by every solver
+    // that reads it, and Vertigo's 1 switches off true closures as soon as
+    // their error exceeds one sigma.
+    const double information = o.switch_prior_information > 0.0
+                                   ? o.switch_prior_information
+                                   : ChiSquareQuantile(dim, PoseGraphOptimizerOptions{}.switch_gate_probability);
     std::visit(
-        [&o](auto& g) {
+        [information](auto& g) {
           g.AddSwitches([](const auto& c) { return !c.IsBetweenConsecutivePoses(); },
-                        SwitchPrior{1.0, o.switch_prior_information});
+                        SwitchPrior{1.0, information});
         },
         graph);
   }
@@ -128,8 +137,8 @@ void AddInjectCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--switchable", o->switchable,
                 "Give every loop closure, true and false, a switch (Vertigo's switchable file)");
   cmd->add_option("--switch-prior-information", o->switch_prior_information,
-                  "With --switchable: the switch priors' information (Vertigo uses 1)")
-      ->capture_default_str();
+                  "With --switchable: the switch priors' information; default: the chi2(dof) quantile "
+                  "catgraph's optimiser gates with (16.27 in 2D, 22.46 in 3D); Vertigo's files use 1");
   cmd->add_option("--labels", o->labels,
                   "Write a CSV with every loop closure and whether it is false");
   cmd->callback([o, outliers, groups, &out] {

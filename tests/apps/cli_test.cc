@@ -322,6 +322,30 @@ TEST_CASE("inject writes switchable files and hierarchical parents", "[apps][inj
   std::filesystem::remove_all(dir);
 }
 
+TEST_CASE("a switchable file inject writes is solved as well as the plain one; Vertigo's prior of 1 is not",
+          "[apps][inject]") {
+  const auto dir = testing::TempDir("cli_inject_switchable");
+  const std::string graph = (dir / "graph.g2o").string();
+  REQUIRE(Run({"generate-graph", "-o", graph, "--poses", "300", "--seed", "2"}).status == 0);
+  // Accepted closures after `optimize`, for each way of writing the same
+  // 30 false closures.
+  auto accepted = [&](const std::string& name, std::vector<std::string> extra) {
+    const std::string spoiled = (dir / (name + ".g2o")).string(), solved = (dir / (name + "-o.g2o")).string();
+    std::vector<std::string> inject = {"inject", graph, "-o", spoiled, "--outliers", "30", "--seed", "4"};
+    inject.insert(inject.end(), extra.begin(), extra.end());
+    REQUIRE(Run(inject).status == 0);
+    const Result r = Run({"optimize", spoiled, "-o", solved, "--json"});
+    REQUIRE(r.status == 0);
+    return nlohmann::json::parse(r.out).at("accepted").get<int>();
+  };
+  const int plain = accepted("plain", {});
+  CHECK(accepted("switchable", {"--switchable"}) == plain);
+  CHECK(testing::ReadText(dir / "switchable.g2o").find("EDGE_SWITCH_PRIOR 300 1 16.26") != std::string::npos);
+  // Vertigo's prior switches off true closures beyond one sigma.
+  CHECK(accepted("vertigo", {"--switchable", "--switch-prior-information", "1"}) < plain / 2);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_CASE("export writes TUM, JSON, DOT, SVG and PNG, edges-only graphs are refused by name",
           "[apps][export]") {
   const auto dir = testing::TempDir("cli_export");
