@@ -57,7 +57,8 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> DeclaredSize(const std::s
         }
       }
       const std::size_t start = at;
-      while (at < b.size() && at - start < 10 && std::isdigit(static_cast<unsigned char>(b[at]))) {
+      // At most 9 digits, so that width x height cannot overflow.
+      while (at < b.size() && at - start < 9 && std::isdigit(static_cast<unsigned char>(b[at]))) {
         v = 10 * v + static_cast<std::uint64_t>(b[at++] - '0');
       }
       if (at == start) return std::nullopt;
@@ -65,23 +66,26 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> DeclaredSize(const std::s
     return std::pair{size[0], size[1]};
   }
   if (IsBmp(b) && b.size() >= 26) {
-    if (LittleEndian(b, 14, 4) == 12) return std::pair{std::uint64_t{LittleEndian(b, 18, 2)}, std::uint64_t{LittleEndian(b, 20, 2)}};
+    if (LittleEndian(b, 14, 4) == 12) {  // OS/2 core header: 16-bit sizes
+      return std::pair{std::uint64_t{LittleEndian(b, 18, 2)}, std::uint64_t{LittleEndian(b, 20, 2)}};
+    }
     // Signed 32-bit; a negative height is a top-down image.
-    const auto width = static_cast<std::int32_t>(LittleEndian(b, 18, 4));
-    const auto height = static_cast<std::int32_t>(LittleEndian(b, 22, 4));
-    auto magnitude = [](std::int32_t v) { return v < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(static_cast<std::int64_t>(v)) : std::uint64_t(v); };
-    return std::pair{magnitude(width), magnitude(height)};
+    auto magnitude = [](std::uint32_t v) {
+      const std::int64_t signed_v = static_cast<std::int32_t>(v);
+      return static_cast<std::uint64_t>(signed_v < 0 ? -signed_v : signed_v);
+    };
+    return std::pair{magnitude(LittleEndian(b, 18, 4)), magnitude(LittleEndian(b, 22, 4))};
   }
   return std::nullopt;
 }
 
-// Refuses an image of more pixels than a camera frame has, before its
-// pixels are allocated.
-void CheckSize(const std::string& name, std::uint64_t width, std::uint64_t height) {
-  if (width * height > kMaxImagePixels) {
-    throw FileError(name, 0, "declares " + std::to_string(width) + " x " + std::to_string(height) +
-                                 " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
-  }
+// An image of more pixels than a camera frame has, refused before its pixels
+// are allocated. Each side is below 2^32, so the product cannot overflow.
+bool TooManyPixels(std::uint64_t width, std::uint64_t height) { return width * height > kMaxImagePixels; }
+
+FileError TooManyPixelsError(const std::string& name, std::uint64_t width, std::uint64_t height) {
+  return FileError(name, 0, "declares " + std::to_string(width) + " x " + std::to_string(height) +
+                                " pixels; expected at most " + std::to_string(kMaxImagePixels) + " (a camera frame)");
 }
 
 // A PNG or JPEG cut short (a copy or download that did not finish), said so
@@ -168,12 +172,11 @@ cv::Mat DecodePng(const std::string& bytes, const std::string& name) {
   bool ok = info != nullptr && PngReadHeader(png, info);
   if (ok) {
     const std::uint64_t width = png_get_image_width(png, info), height = png_get_image_height(png, info);
-    if (width * height > kMaxImagePixels) {
+    if (TooManyPixels(width, height)) {
       png_destroy_read_struct(&png, &info, nullptr);
-      CheckSize(name, width, height);
+      throw TooManyPixelsError(name, width, height);
     }
-    image.create(static_cast<int>(png_get_image_height(png, info)), static_cast<int>(png_get_image_width(png, info)),
-                 CV_8UC3);
+    image.create(static_cast<int>(height), static_cast<int>(width), CV_8UC3);
     for (int r = 0; r < image.rows; ++r) rows.push_back(image.ptr<png_byte>(r));
     ok = PngReadPixels(png, info, rows.data());
   }
@@ -240,10 +243,10 @@ std::optional<cv::Mat> DecodeJpeg(const std::string& bytes, const std::string& n
   cv::Mat image;
   std::vector<JSAMPROW> rows;
   bool ok = JpegReadHeader(&jpeg, &errors, bytes);
-  if (ok && std::uint64_t{jpeg.image_width} * jpeg.image_height > kMaxImagePixels) {
-    const std::uint64_t width = jpeg.image_width, height = jpeg.image_height;
+  if (ok && TooManyPixels(jpeg.image_width, jpeg.image_height)) {
+    const FileError error = TooManyPixelsError(name, jpeg.image_width, jpeg.image_height);
     jpeg_destroy_decompress(&jpeg);
-    CheckSize(name, width, height);
+    throw error;
   }
   // CMYK and YCCK (print workflows, not cameras) are left to OpenCV, which
   // converts them itself.
@@ -273,7 +276,7 @@ cv::Mat ReadImage(const std::filesystem::path& path) {
   if (IsJpeg(bytes)) {
     if (auto image = DecodeJpeg(bytes, name)) return std::move(*image);
   } else if (const auto size = DeclaredSize(bytes)) {
-    CheckSize(name, size->first, size->second);
+    if (TooManyPixels(size->first, size->second)) throw TooManyPixelsError(name, size->first, size->second);
   } else {
     // OpenCV's other decoders (TIFF, WebP, JPEG 2000, ...) would allocate
     // whatever their header declares, up to 2^30 pixels, unchecked here.
