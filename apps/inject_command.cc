@@ -3,10 +3,10 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "apps/commands.h"
-#include "backend/chi_square.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/output_directory.h"
@@ -72,11 +72,13 @@ void RunInject(InjectOptions o, std::ostream& out) {
     // (docs/backend.md): a file's switch priors are kept by every solver
     // that reads it, and Vertigo's 1 switches off true closures as soon as
     // their error exceeds one sigma.
-    const double information = o.switch_prior_information > 0.0
-                                   ? o.switch_prior_information
-                                   : ChiSquareQuantile(dim, PoseGraphOptimizerOptions{}.switch_gate_probability);
     std::visit(
-        [information](auto& g) {
+        [&o](auto& g) {
+          using PoseT = typename std::decay_t<decltype(g)>::Pose;
+          const double information =
+              o.switch_prior_information > 0.0
+                  ? o.switch_prior_information
+                  : Gate<PoseT>(RelativePoseCostType::kG2o, PoseGraphOptimizerOptions{}.switch_gate_probability);
           g.AddSwitches([](const auto& c) { return !c.IsBetweenConsecutivePoses(); },
                         SwitchPrior{1.0, information});
         },

@@ -77,9 +77,8 @@ double GraphChordalCost(const PoseGraph<PoseT>& graph) {
   return f;
 }
 
-// The gate every method decides at (docs/backend.md): the quantile of a true
-// closure's squared residual norm, chi2(dof) for g2o's error, the chordal
-// cost's own distribution for the chordal one.
+}  // namespace
+
 template <typename PoseT>
 double Gate(RelativePoseCostType cost, double probability) {
   if (cost == RelativePoseCostType::kChordal) {
@@ -87,6 +86,11 @@ double Gate(RelativePoseCostType cost, double probability) {
   }
   return ChiSquareQuantile(PoseT::kTangentDim, probability);
 }
+
+template double Gate<Pose2>(RelativePoseCostType, double);
+template double Gate<Pose3>(RelativePoseCostType, double);
+
+namespace {
 
 // Whether the method decides at the gate, with no explicit parameter in its
 // place.

@@ -29,7 +29,6 @@ Color PaletteColor(int index);
 // vermillion (dashed); frames that see a changed region reddish purple.
 inline constexpr Color kTrajectoryColor{0.000, 0.447, 0.698};
 inline constexpr Color kTruthColor{0.25, 0.25, 0.25, 0.7};
-inline constexpr Color kOdometryColor{0.55, 0.55, 0.55};
 inline constexpr Color kVisualClosureColor{0.000, 0.620, 0.451};
 inline constexpr Color kInferredClosureColor{0.902, 0.624, 0.000};
 inline constexpr Color kOtherClosureColor{0.337, 0.706, 0.914};
