@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "backend/io/graph_io.h"
+
 namespace catgraph {
 
 void AddInfoCommand(CLI::App& app, std::ostream& out);
@@ -40,6 +42,13 @@ void AddOverwriteFlag(CLI::App& command, bool& overwrite);
 
 // The --format option every graph-reading command takes.
 void AddGraphFormatOption(CLI::App& command, std::string& format);
+
+// Reads the graph a command was given, `format` as --format takes it.
+GraphFile ReadCommandGraph(const std::string& path, const std::string& format);
+// Writes the note a command prints when the reader left out edges from a
+// vertex to itself, "note: PATH: 2 edges from a vertex to itself left out, as
+// g2o does (lines 5, 9)", and nothing when there were none.
+void WriteSelfEdgeNote(std::ostream& out, const std::string& path, const GraphFile& file);
 
 // Builds the whole command-line interface, writing reports to `out`.
 void AddAllCommands(CLI::App& app, std::ostream& out);

@@ -52,9 +52,8 @@ nlohmann::json StatisticsJson(const ErrorStatistics& s, double scale = 1.0) {
 }
 
 void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
-  ReadGraphOptions read_options;
-  read_options.format = *GraphFormatFromString(o.format);
-  const AnyPoseGraph estimate = ReadGraphFile(o.estimate, read_options).graph;
+  const GraphFile file = ReadCommandGraph(o.estimate, o.format);
+  const AnyPoseGraph& estimate = file.graph;
   const AnyTrajectory truth =
       ReadTrajectoryFile(o.truth, *TrajectoryFormatFromString(o.truth_format));
   AnyTrajectory estimated;
@@ -115,6 +114,7 @@ void RunEvaluate(const EvaluateOptions& o, std::ostream& out) {
     out << j.dump(2) << '\n';
     return;
   }
+  WriteSelfEdgeNote(out, o.estimate, file);
   out << o.estimate << " against " << o.truth << " (" << t.poses << " poses)\n"
       << "ATE after alignment (m): rmse " << t.ate_m.rmse << ", mean " << t.ate_m.mean
       << ", median " << t.ate_m.median << ", max " << t.ate_m.max << '\n'

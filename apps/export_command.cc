@@ -30,9 +30,8 @@ void RunExport(const ExportOptions& o, std::ostream& out) {
                                   "'; give --format tum|json|dot|svg|png|g2o");
     }
   }
-  ReadGraphOptions read_options;
-  read_options.format = *GraphFormatFromString(o.input_format);
-  const AnyPoseGraph graph = ReadGraphFile(o.input, read_options).graph;
+  const GraphFile file = ReadCommandGraph(o.input, o.input_format);
+  const AnyPoseGraph& graph = file.graph;
   try {
     if (format == "tum") WriteTumFile(TrajectoryOf(graph), o.output);
     if (format == "json") WriteGraphJsonFile(graph, o.output);
@@ -49,6 +48,7 @@ void RunExport(const ExportOptions& o, std::ostream& out) {
     // A graph without poses: name the file the user gave.
     throw FileError(o.input, 0, std::string(e.what()));
   }
+  WriteSelfEdgeNote(out, o.input, file);
   out << "wrote " << o.output << " (" << format << ")\n";
 }
 

@@ -27,9 +27,7 @@ std::string KindCounts(const GraphSummary& s) {
 }
 
 void RunInfo(const InfoOptions& options, std::ostream& out) {
-  ReadGraphOptions read_options;
-  read_options.format = *GraphFormatFromString(options.format);
-  const GraphFile file = ReadGraphFile(options.file, read_options);
+  const GraphFile file = ReadCommandGraph(options.file, options.format);
   const GraphSummary s = Summarize(file.graph);
   const std::string sqrt_warning =
       "the information matrices look like square-root information (" +
@@ -56,6 +54,7 @@ void RunInfo(const InfoOptions& options, std::ostream& out) {
     j["connected"] = s.connected;
     j["connected_components"] = s.connected_components;
     j["square_root_information_suspected"] = s.looks_like_square_root_information;
+    j["self_edges_skipped"] = file.self_edge_lines.size();
     j["warnings"] = nlohmann::json::array();
     if (s.looks_like_square_root_information) j["warnings"].push_back(sqrt_warning);
     out << j.dump(2) << '\n';
@@ -72,6 +71,7 @@ void RunInfo(const InfoOptions& options, std::ostream& out) {
       << "closure kinds: " << KindCounts(s) << '\n'
       << "connected:     " << (s.connected ? "yes" : "no") << " (" << s.connected_components
       << (s.connected_components == 1 ? " component)\n" : " components)\n");
+  WriteSelfEdgeNote(out, options.file, file);
   if (s.vertices_without_pose > 0) {
     out << "note: " << s.vertices_without_pose
         << " vertices have no initial pose; the optimiser initialises them\n";

@@ -47,9 +47,9 @@ Eigen::MatrixXd InformationFromValues(const std::vector<double>& values, int dim
 
 void RunInject(InjectOptions o, std::ostream& out) {
   RefuseOutputClashes({o.output, o.labels}, {o.input});
-  ReadGraphOptions read_options;
-  read_options.format = *GraphFormatFromString(o.format);
-  AnyPoseGraph graph = ReadGraphFile(o.input, read_options).graph;
+  GraphFile file = ReadCommandGraph(o.input, o.format);
+  WriteSelfEdgeNote(out, o.input, file);
+  AnyPoseGraph graph = std::move(file.graph);
   const int dim = std::holds_alternative<PoseGraph2>(graph) ? 3 : 6;
   o.outliers.policy = *OutlierPolicyFromString(o.policy);
   if (o.groups >= 0) {

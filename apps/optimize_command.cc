@@ -27,10 +27,11 @@ struct OptimizeOptions {
   PoseGraphOptimizerOptions optimizer;
 };
 
-nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization& r,
+nlohmann::json ReportJson(const OptimizeOptions& o, const GraphFile& file, const PoseGraphOptimization& r,
                           bool with_closures) {
   nlohmann::json j;
   j["input"] = o.input;
+  j["self_edges_skipped"] = file.self_edge_lines.size();
   j["output"] = o.output;
   j["method"] = o.method;
   j["init"] = o.init;
@@ -95,9 +96,7 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const PoseGraphOptimization&
 
 void RunOptimize(OptimizeOptions options, std::ostream& out) {
   RefuseOutputClashes({options.output, options.report}, {options.input});
-  ReadGraphOptions read_options;
-  read_options.format = *GraphFormatFromString(options.format);
-  const GraphFile file = ReadGraphFile(options.input, read_options);
+  const GraphFile file = ReadCommandGraph(options.input, options.format);
   options.optimizer.method = *RobustMethodFromString(options.method);
   options.optimizer.initial_guess = *InitialGuessFromString(options.init);
   options.optimizer.cost =
@@ -110,13 +109,14 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
                options.output);
   if (!options.report.empty()) {
     WriteFileAtomically(options.report, [&](std::ostream& report) {
-      report << ReportJson(options, result, true).dump(2) << '\n';
+      report << ReportJson(options, file, result, true).dump(2) << '\n';
     });
   }
   if (options.json) {
-    out << ReportJson(options, result, false).dump(2) << '\n';
+    out << ReportJson(options, file, result, false).dump(2) << '\n';
     return;
   }
+  WriteSelfEdgeNote(out, options.input, file);
   if (result.gate_factor > 1.0) {
     out << "the graph's short cycles show " << result.gate_factor
         << " times the noise its information states (" << result.noise_scale.cycles

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <exception>
 #include <optional>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,6 +15,22 @@ void AddGraphFormatOption(CLI::App& command, std::string& format) {
   command.add_option("--format", format, "Input format; auto decides from the tags (and .graph for TORO)")
       ->check(CLI::IsMember({"auto", "g2o", "toro", "isam"}))
       ->capture_default_str();
+}
+
+GraphFile ReadCommandGraph(const std::string& path, const std::string& format) {
+  ReadGraphOptions options;
+  options.format = *GraphFormatFromString(format);
+  return ReadGraphFile(path, options);
+}
+
+void WriteSelfEdgeNote(std::ostream& out, const std::string& path, const GraphFile& file) {
+  const std::vector<int>& lines = file.self_edge_lines;
+  if (lines.empty()) return;
+  out << "note: " << path << ": " << lines.size() << (lines.size() == 1 ? " edge" : " edges")
+      << " from a vertex to itself left out, as g2o does (line" << (lines.size() == 1 ? " " : "s ");
+  constexpr std::size_t kNamed = 10;
+  for (std::size_t k = 0; k < std::min(lines.size(), kNamed); ++k) out << (k ? ", " : "") << lines[k];
+  out << (lines.size() > kNamed ? ", ...)\n" : ")\n");
 }
 
 namespace {

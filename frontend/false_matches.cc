@@ -5,6 +5,7 @@
 #include <numeric>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -23,6 +24,11 @@ struct Track {
 std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& d, const CatGraphOptions& filter,
                                                      const FalseMatchOptions& o) {
   auto fail = [](const std::string& what) { throw std::invalid_argument("false visual matches: " + what); };
+  auto metres = [](double m) {
+    std::ostringstream out;
+    out << m << " m";
+    return out.str();
+  };
   if (o.count < 0) fail("the count must be >= 0");
   if (!(o.stretch_m > 0.0 && o.min_error_m > 0.0 && o.shape_tolerance_m > 0.0 && o.shape_tolerance_rad > 0.0 &&
         o.separation_m >= 0.0 && o.max_error_m >= o.min_error_m)) {
@@ -98,9 +104,9 @@ std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& d, const Cat
   }
   if (static_cast<int>(plan.size()) < o.count) {
     fail("only " + std::to_string(plan.size()) + " of the " + std::to_string(o.count) +
-         " asked for fit this dataset (" + std::to_string(o.stretch_m) + " m stretches, " +
-         std::to_string(o.separation_m) + " m apart, at least " + std::to_string(o.min_error_m) +
-         " m from the truth, of the same shape as an old stretch inside the odometric gate)");
+         " asked for fit this dataset (" + metres(o.stretch_m) + " stretches, " +
+         metres(o.separation_m) + " apart, at least " + metres(o.min_error_m) +
+         " from the truth, of the same shape as an old stretch inside the odometric gate)");
   }
   std::sort(plan.begin(), plan.end(),
             [](const FalseVisualMatch& a, const FalseVisualMatch& b) { return a.first_frame < b.first_frame; });

@@ -20,7 +20,7 @@ float MapZ(double v, double mean, double sd) {
   return static_cast<float>(std::clamp(((v - mean) / sd + 3.0) / 6.0, 0.0, 1.0));
 }
 
-void MeanAndDeviation(const cv::Mat& m, const cv::Rect& r, double& mean, double& sd) {
+void RegionMoments(const cv::Mat& m, const cv::Rect& r, double& mean, double& sd) {
   cv::Scalar mu, sigma;
   cv::meanStdDev(m(r), mu, sigma);
   mean = mu[0];
@@ -74,7 +74,7 @@ cv::Mat SadTemplate(const cv::Mat& image, const SadOptions& o) {
       for (int x = 0; x < t.cols; ++x) {
         const int x0 = std::max(0, x - r), y0 = std::max(0, y - r);
         const cv::Rect window(x0, y0, std::min(t.cols, x + r + 1) - x0, std::min(t.rows, y + r + 1) - y0);
-        MeanAndDeviation(t, window, mean, sd);
+        RegionMoments(t, window, mean, sd);
         out.at<float>(y, x) = MapZ(t.at<float>(y, x), mean, sd);
       }
     }
@@ -83,7 +83,7 @@ cv::Mat SadTemplate(const cv::Mat& image, const SadOptions& o) {
   for (int y0 = 0; y0 < t.rows; y0 += o.patch_px) {
     for (int x0 = 0; x0 < t.cols; x0 += o.patch_px) {
       const cv::Rect patch(x0, y0, std::min(o.patch_px, t.cols - x0), std::min(o.patch_px, t.rows - y0));
-      MeanAndDeviation(t, patch, mean, sd);
+      RegionMoments(t, patch, mean, sd);
       for (int y = patch.y; y < patch.y + patch.height; ++y) {
         for (int x = patch.x; x < patch.x + patch.width; ++x) out.at<float>(y, x) = MapZ(t.at<float>(y, x), mean, sd);
       }

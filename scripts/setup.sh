@@ -8,7 +8,7 @@
 #                            catgraph into a prefix and build and run
 #                            examples/ against it, then build the suite with
 #                            clang under AddressSanitizer + UBSan and run it
-#                            again, then every fuzz target for a minute
+#                            again, then every fuzz target for 30 s
 #                            (README command 2; docs/fuzzing.md)
 #   scripts/setup.sh build   install and build only
 #
@@ -56,9 +56,14 @@ install_missing_packages() {
 step() { echo "setup: $1 (${SECONDS} s in)"; }
 
 # configure_and_build BUILD_DIR [extra cmake arguments...]
+# A new folder is configured for Ninja, which starts compiling a target while
+# the libraries it links are still being built; a folder configured earlier
+# keeps its generator.
 configure_and_build() {
   local dir="$1"; shift
-  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DCATGRAPH_WERROR=ON "$@" >/dev/null
+  local generator=()
+  [[ -f "$dir/CMakeCache.txt" ]] || generator=(-G Ninja)
+  cmake -S "$root" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DCATGRAPH_WERROR=ON "$@" >/dev/null
   cmake --build "$dir" -j "$jobs"
 }
 
@@ -97,8 +102,8 @@ case "$mode" in
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       ctest --test-dir "$build_dir-sanitize" -j "$jobs" --output-on-failure
     # A fixed seed, so that a run's verdict does not depend on luck.
-    step "every fuzz target for 60 s"
-    FUZZ_BUILD_DIR="$build_dir-sanitize" FUZZ_SEED=1 bash "$root/scripts/fuzz.sh" 60
+    step "every fuzz target for 30 s"
+    FUZZ_BUILD_DIR="$build_dir-sanitize" FUZZ_SEED=1 bash "$root/scripts/fuzz.sh" 30
     ;;
 esac
 step "done"

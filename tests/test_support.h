@@ -18,6 +18,9 @@
 
 namespace catgraph::testing {
 
+// Random draws per property checked on random poses.
+inline constexpr int kTrials = 1000;
+
 inline Pose2 RandomPose2(std::mt19937_64& rng, double extent_m = 10.0) {
   std::uniform_real_distribution<double> t(-extent_m, extent_m);
   std::uniform_real_distribution<double> a(-std::numbers::pi, std::numbers::pi);

@@ -9,21 +9,6 @@
 #include "backend/io/internal/text_line.h"
 
 namespace catgraph {
-namespace {
-
-std::vector<std::string_view> SplitCsv(std::string_view text) {
-  std::vector<std::string_view> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = text.find(',', start);
-    fields.push_back(text.substr(start, comma == std::string_view::npos ? text.npos : comma - start));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
-}  // namespace
 
 std::vector<ClosureLabel> ReadClosureLabels(std::istream& in, const std::string& name, std::vector<int>* lines) {
   std::vector<ClosureLabel> labels;

@@ -24,22 +24,6 @@ namespace {
 constexpr std::size_t kMaxCsvLineBytes = 4096;
 constexpr std::uintmax_t kMaxMetaBytes = 256u << 20;  // meta.json holds per-frame flags
 
-std::vector<std::string_view> SplitCsv(std::string_view line) {
-  std::vector<std::string_view> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos
-                                                                                 : comma - start);
-    const std::size_t b = field.find_first_not_of(kWhitespace);
-    const std::size_t e = field.find_last_not_of(kWhitespace);
-    fields.push_back(b == std::string_view::npos ? std::string_view() : field.substr(b, e - b + 1));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
 // Calls `row` for every data line of a CSV file whose header starts with
 // `columns`; extra columns named in `optional` may follow.
 template <typename RowFn>

@@ -23,6 +23,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "backend/graph/pose_graph.h"
 
@@ -50,6 +51,10 @@ struct ReadGraphOptions {
 struct GraphFile {
   AnyPoseGraph graph;
   GraphFormat format = GraphFormat::kG2o;  // the format it was read as
+  // The lines of edges from a vertex to itself, which constrain nothing and
+  // are left out of `graph`, as g2o leaves them out (published files have
+  // them). The ids of the other edges do not change.
+  std::vector<int> self_edge_lines;
 };
 
 // Throws FileError.

@@ -169,7 +169,9 @@ class GraphParser {
   void Parse(const Line& line, const std::optional<ClosureMetadata>& metadata);
   std::size_t edge_count() const { return raw_.edges.size(); }
   void SetLastEdgeDecision(const RobustDecision& decision) { raw_.edges.back().constraint.decision = decision; }
-  PoseGraph<PoseT> Assemble(int last_line) const;
+  // `self_edge_lines` receives the lines of the edges left out because they
+  // join a vertex to itself.
+  PoseGraph<PoseT> Assemble(int last_line, std::vector<int>& self_edge_lines) const;
 
  private:
   static constexpr int N = PoseT::kTangentDim;
@@ -303,7 +305,7 @@ void GraphParser<PoseT>::Parse(const Line& line, const std::optional<ClosureMeta
 
 
 template <typename PoseT>
-PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line) const {
+PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line, std::vector<int>& self_edge_lines) const {
   PoseGraph<PoseT> graph;
   // g2o keeps poses and switches in one id space.
   std::map<std::int64_t, int> defined_at;
@@ -348,6 +350,10 @@ PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line) const {
   for (const auto& [line, read, explicit_id] : raw_.edges) {
     Constraint<PoseT> constraint = read;
     if (!explicit_id && explicit_ids.contains(constraint.id)) constraint.id = ClosureId(next_free++);
+    if (constraint.from == constraint.to && (edges_only || graph.vertices.contains(constraint.from))) {
+      self_edge_lines.push_back(line);
+      continue;
+    }
     for (const PoseId end : {constraint.from, constraint.to}) {
       if (graph.vertices.contains(end)) continue;
       if (!edges_only) {
@@ -359,11 +365,6 @@ PoseGraph<PoseT> GraphParser<PoseT>::Assemble(int last_line) const {
                                          " as a pose");
       }
       graph.vertices.emplace(end, Vertex<PoseT>{end, std::nullopt, false});
-    }
-    if (constraint.from == constraint.to) {
-      throw FileError(file_, line, "edge connects vertex " +
-                                       std::to_string(constraint.from.value()) +
-                                       " to itself; expected two different vertices");
     }
     if (constraint.switch_id && !graph.switches.contains(*constraint.switch_id)) {
       throw FileError(file_, line, "switchable edge refers to switch " +
@@ -424,7 +425,8 @@ GraphFormat DetectFormat(const std::string& name, const std::vector<PendingLine>
 
 template <typename PoseT>
 PoseGraph<PoseT> ParseLines(const std::string& name, const std::vector<PendingLine>& lines,
-                            GraphFormat format, const ReadGraphOptions& options, int last_line) {
+                            GraphFormat format, const ReadGraphOptions& options, int last_line,
+                            std::vector<int>& self_edge_lines) {
   GraphParser<PoseT> parser(name, format, options);
   std::optional<ClosureMetadata> metadata;
   std::optional<RobustDecision> decision;
@@ -462,7 +464,7 @@ PoseGraph<PoseT> ParseLines(const std::string& name, const std::vector<PendingLi
     throw FileError(name, last_line, std::string(metadata ? kClosureMetadataTag : kDecisionTag) +
                                          " at the end of the file; expected an edge line after it");
   }
-  return parser.Assemble(last_line);
+  return parser.Assemble(last_line, self_edge_lines);
 }
 
 }  // namespace
@@ -511,9 +513,9 @@ GraphFile ReadGraph(std::istream& in, const std::string& name, const ReadGraphOp
   GraphFile result;
   result.format = DetectFormat(name, lines, options.format);
   if (dimension == 3) {
-    result.graph = ParseLines<Pose3>(name, lines, result.format, options, number);
+    result.graph = ParseLines<Pose3>(name, lines, result.format, options, number, result.self_edge_lines);
   } else {
-    result.graph = ParseLines<Pose2>(name, lines, result.format, options, number);
+    result.graph = ParseLines<Pose2>(name, lines, result.format, options, number, result.self_edge_lines);
   }
   return result;
 }

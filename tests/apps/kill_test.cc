@@ -38,7 +38,7 @@ namespace {
 // killed with SIGKILL unless it ended first. A `file_size_limit` (bytes) makes
 // every write past it fail with EFBIG, as a full disk makes it fail with
 // ENOSPC. Returns the exit status, or -1 when it was killed.
-int Run(const std::vector<std::string>& args, const std::function<bool()>& kill_when = {},
+int RunProcess(const std::vector<std::string>& args, const std::function<bool()>& kill_when = {},
         const std::string& log = "/dev/null", rlim_t file_size_limit = RLIM_INFINITY) {
   std::vector<std::string> copy = args;
   std::string binary = CATGRAPH_BINARY;
@@ -138,18 +138,18 @@ TEST_CASE("simulate and map killed at random points leave the earlier output who
     return std::vector<std::string>{"simulate", "--scenario", "office-change", "--frames", frames,
                                     "-o",       data,           "--threads",     "1",      "--quiet"};
   };
-  REQUIRE(Run(simulate("100")) == 0);
+  REQUIRE(RunProcess(simulate("100")) == 0);
   const std::string old_frames = Slurp(std::filesystem::path(data) / "frames.csv");
   int killed = 0;
   for (const double t : KillTimes(4, 0.05, 1.5, 11)) {
     CAPTURE(t);
-    killed += Run(simulate("400"), After(t)) == -1;
+    killed += RunProcess(simulate("400"), After(t)) == -1;
     CheckNoTornFile(data);
     CHECK(Slurp(std::filesystem::path(data) / "frames.csv") == old_frames);  // the old dataset, whole
     CHECK(ReadDataset(data).frames.size() == 100);
   }
   CHECK(killed > 0);
-  REQUIRE(Run(simulate("400")) == 0);
+  REQUIRE(RunProcess(simulate("400")) == 0);
   CHECK(CheckNoTornFile(data) > 400);  // the images, the tables and the manifest
   CHECK(ReadDataset(data).frames.size() == 400);
   CHECK(Listing(root) == std::vector<std::string>{"data"});  // the killed runs' staging folders are gone
@@ -159,22 +159,22 @@ TEST_CASE("simulate and map killed at random points leave the earlier output who
   killed = 0;
   for (const double t : KillTimes(4, 0.2, 4.0, 12)) {
     CAPTURE(t);
-    killed += Run(mapping, After(t)) == -1;
+    killed += RunProcess(mapping, After(t)) == -1;
     CHECK_FALSE(std::filesystem::exists(map));  // all or nothing
   }
   CHECK(killed > 0);
-  REQUIRE(Run(mapping) == 0);
+  REQUIRE(RunProcess(mapping) == 0);
   const std::string first = Slurp(report);
   CHECK(nlohmann::json::parse(first).at("frames") == 400);
   killed = 0;
   for (const double t : KillTimes(2, 0.2, 4.0, 13)) {
     CAPTURE(t);
-    killed += Run(mapping, After(t)) == -1;
+    killed += RunProcess(mapping, After(t)) == -1;
     CheckNoTornFile(map);
     CHECK(Slurp(report) == first);
   }
   CHECK(killed > 0);
-  REQUIRE(Run(mapping) == 0);
+  REQUIRE(RunProcess(mapping) == 0);
   CheckNoTornFile(map);
   CHECK(Listing(root) == std::vector<std::string>{"data", "map"});
   std::filesystem::remove_all(root);
@@ -194,15 +194,15 @@ TEST_CASE("a write that fails part-way, as on a full disk, leaves the earlier ou
                                     "-o",       data,           "--threads",     "1",      "--quiet"};
   };
   const std::vector<std::string> mapping = {"map", data, "-o", map, "--quiet", "--threads", "1"};
-  REQUIRE(Run(simulate("60")) == 0);
-  REQUIRE(Run(mapping) == 0);
+  REQUIRE(RunProcess(simulate("60")) == 0);
+  REQUIRE(RunProcess(mapping) == 0);
   const std::string frames = Slurp(std::filesystem::path(data) / "frames.csv");
   const std::string report = Slurp(std::filesystem::path(map) / "report.json");
   const std::vector<std::string> data_files = Listing(std::filesystem::path(data) / "images");
   const auto log = (root / "log").string();
   constexpr rlim_t kLimit = 24 * 1024;
 
-  CHECK(Run(simulate("80"), {}, log, kLimit) == 1);
+  CHECK(RunProcess(simulate("80"), {}, log, kLimit) == 1);
   std::string err = Slurp(log);
   CHECK(err.find("write failed: File too large") != std::string::npos);
   CHECK(err.find("/images/000") != std::string::npos);  // the image it could not write
@@ -210,7 +210,7 @@ TEST_CASE("a write that fails part-way, as on a full disk, leaves the earlier ou
   CHECK(Listing(std::filesystem::path(data) / "images") == data_files);
   CHECK(ReadDataset(data).frames.size() == 60);
 
-  CHECK(Run(mapping, {}, log, kLimit) == 1);
+  CHECK(RunProcess(mapping, {}, log, kLimit) == 1);
   err = Slurp(log);
   CHECK(err.find("write failed: File too large") != std::string::npos);
   CHECK(Slurp(std::filesystem::path(map) / "report.json") == report);
@@ -222,7 +222,7 @@ TEST_CASE("a write that fails part-way, as on a full disk, leaves the earlier ou
 
 TEST_CASE("a sweep killed at random points resumes without repeating a finished run", "[apps][kill][sweep][slow]") {
   const auto root = testing::TempDir("kill_sweep");
-  REQUIRE(Run({"generate-graph", "--poses", "300", "-o", (root / "g.g2o").string(), "--truth",
+  REQUIRE(RunProcess({"generate-graph", "--poses", "300", "-o", (root / "g.g2o").string(), "--truth",
                (root / "t.g2o").string()}) == 0);
   std::ofstream(root / "sweep.yaml") << "output: runs.csv\n"
                                         "datasets:\n  - name: g\n    graph: g.g2o\n    truth: t.g2o\n"
@@ -244,7 +244,7 @@ TEST_CASE("a sweep killed at random points resumes without repeating a finished 
   for (int k = 0; k < 3; ++k) {
     const std::size_t target = std::min<std::size_t>(17, rows + std::uniform_int_distribution<std::size_t>(1, 5)(rng));
     CAPTURE(target);
-    CHECK(Run(sweep, [&] { return rows_in() >= target; }) == -1);
+    CHECK(RunProcess(sweep, [&] { return rows_in() >= target; }) == -1);
     CheckNoTornFile(root);
     const std::size_t now = ReadSweepCsv(csv).size();
     CHECK(now >= target);  // nothing finished is lost
@@ -252,7 +252,7 @@ TEST_CASE("a sweep killed at random points resumes without repeating a finished 
   }
   CHECK(rows > 0);
   const std::string log = (root / "rerun.log").string();
-  REQUIRE(Run(sweep, {}, log) == 0);
+  REQUIRE(RunProcess(sweep, {}, log) == 0);
   INFO(Slurp(log));
   CHECK(Slurp(log).find("18 runs, " + std::to_string(rows) + " already in") != std::string::npos);
   const std::vector<SweepRow> all = ReadSweepCsv(csv);

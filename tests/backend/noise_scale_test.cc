@@ -275,7 +275,7 @@ TEST_CASE("true closures with heavier tails than one Gaussian keep the first gat
 
 TEST_CASE("switchable constraints keep sphere_bignoise's closures: its information states a "
           "15th of its noise",
-          "[backend][noise-scale][shared]") {
+          "[backend][noise-scale][shared][slow]") {
   CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   const AnyPoseGraph sphere = ReadGraphFile(root / "se-sync/sphere_bignoise_vertex3.g2o").graph;
   const PoseGraphOptimization r = OptimizePoseGraph(sphere);

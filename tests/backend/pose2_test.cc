@@ -12,7 +12,7 @@ namespace {
 
 using testing::ApproxEqual;
 using testing::RandomPose2;
-constexpr int kTrials = 1000;
+using testing::kTrials;
 constexpr double kPi = std::numbers::pi;
 
 TEST_CASE("WrapAngle maps every angle into the half-open interval from -pi to pi", "[graph][pose2]") {

@@ -11,7 +11,7 @@ namespace {
 
 using testing::ApproxEqual;
 using testing::RandomPose3;
-constexpr int kTrials = 1000;
+using testing::kTrials;
 
 TEST_CASE("Pose3 composed with its inverse is the identity", "[graph][pose3]") {
   std::mt19937_64 rng(11);

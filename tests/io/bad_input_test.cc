@@ -21,7 +21,7 @@ constexpr const char* kInfo = " 1 0 0 1 0 1";
 
 // Reads `text` as file "bad.g2o" and returns the error message; fails the
 // test if no FileError is thrown.
-std::string ErrorOf(const std::string& text, const std::string& name = "bad.g2o") {
+std::string GraphReadError(const std::string& text, const std::string& name = "bad.g2o") {
   std::istringstream in(text);
   try {
     ReadGraph(in, name);
@@ -33,7 +33,7 @@ std::string ErrorOf(const std::string& text, const std::string& name = "bad.g2o"
 }
 
 void CheckError(const std::string& text, const std::string& where, const std::string& what) {
-  const std::string message = ErrorOf(text);
+  const std::string message = GraphReadError(text);
   INFO(message);
   CHECK(message.rfind(where, 0) == 0);  // starts with file:line
   CHECK(message.find(what) != std::string::npos);
@@ -81,8 +81,8 @@ TEST_CASE("an edge to a missing vertex names the vertex", "[io][bad-input]") {
   CheckError(std::string(kGood) + "EDGE_SE2_SWITCHABLE 0 1 9 1 0 0" + kInfo + "\n",
              "bad.g2o:3:", "switch 9");
   CheckError(std::string(kGood) + "FIX 7\n", "bad.g2o:3:", "FIX refers to vertex 7");
-  CheckError(std::string(kGood) + "EDGE_SE2 1 1 1 0 0" + kInfo + "\n", "bad.g2o:3:",
-             "to itself");
+  CheckError(std::string(kGood) + "EDGE_SE2 7 7 1 0 0" + kInfo + "\n", "bad.g2o:3:",
+             "vertex 7, which is not defined");
 }
 
 TEST_CASE("a duplicate vertex id names both lines", "[io][bad-input]") {
@@ -166,7 +166,7 @@ TEST_CASE("a FIFO is refused at once, not waited on", "[io][bad-input]") {
 }
 
 TEST_CASE("control bytes of the input are escaped: the message stays one harmless line", "[io][bad-input]") {
-  const std::string message = ErrorOf("VERTEX_SE2 0 0 0 0\nVERTEX_\x1b[31mX\x07 1 0 0 0\n");
+  const std::string message = GraphReadError("VERTEX_SE2 0 0 0 0\nVERTEX_\x1b[31mX\x07 1 0 0 0\n");
   INFO(message);
   CHECK(message.find('\x1b') == std::string::npos);
   CHECK(message.find('\x07') == std::string::npos);

@@ -28,6 +28,28 @@ AnyPoseGraph RoundTrip(const AnyPoseGraph& graph) {
   return ReadString(out.str()).graph;
 }
 
+TEST_CASE("an edge from a vertex to itself is left out with its line, and the other edges keep their ids",
+          "[io][g2o]") {
+  const std::string info = " 1 0 0 1 0 1";
+  std::istringstream in("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\n"
+                        "EDGE_SE2 0 1 1 0 0" + info + "\nEDGE_SE2 1 1 0 0 0" + info + "\n"
+                        "EDGE_SE2 1 2 1 0 0" + info + "\nEDGE_SE2 2 0 -2 0 0" + info + "\n");
+  const GraphFile file = ReadGraph(in, "self.g2o");
+  CHECK(file.self_edge_lines == std::vector<int>{5});
+  const auto& graph = std::get<PoseGraph2>(file.graph);
+  REQUIRE(graph.constraints.size() == 3);
+  CHECK(graph.constraints[0].id == ClosureId(0));
+  CHECK(graph.constraints[1].id == ClosureId(2));
+  CHECK(graph.constraints[2].id == ClosureId(3));
+  for (const auto& c : graph.constraints) CHECK(c.from != c.to);
+
+  // Edges only: a vertex named by a self edge alone is not made.
+  std::istringstream edges_only("EDGE_SE2 0 1 1 0 0" + info + "\nEDGE_SE2 5 5 0 0 0" + info + "\n");
+  const GraphFile e = ReadGraph(edges_only, "self.g2o");
+  CHECK(e.self_edge_lines == std::vector<int>{2});
+  CHECK(std::get<PoseGraph2>(e.graph).vertices.size() == 2);
+}
+
 TEST_CASE("g2o 2D edges keep the upper-triangle information order", "[io][g2o]") {
   const auto file = ReadString(
       "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 2 0.5 11 12 13 22 23 33\n");

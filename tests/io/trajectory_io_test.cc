@@ -20,7 +20,7 @@ AnyTrajectory Read(const std::string& text, TrajectoryFormat format = Trajectory
   return ReadTrajectory(in, "t.txt", format);
 }
 
-std::string ErrorOf(const std::string& text, TrajectoryFormat format = TrajectoryFormat::kAuto) {
+std::string ReadError(const std::string& text, TrajectoryFormat format = TrajectoryFormat::kAuto) {
   try {
     Read(text, format);
   } catch (const FileError& e) {
@@ -73,24 +73,24 @@ TEST_CASE("TUM written and read back gives the same trajectory", "[io][trajector
 
 TEST_CASE("bad trajectory files name the file, the line and what was expected",
           "[io][trajectory][bad-input]") {
-  CHECK(ErrorOf("0 0 0\nx 0 0\n") == "t.txt:2: pose: expected a number for x, found 'x'");
-  CHECK(ErrorOf("0 0 0\n1 0\n") ==
+  CHECK(ReadError("0 0 0\nx 0 0\n") == "t.txt:2: pose: expected a number for x, found 'x'");
+  CHECK(ReadError("0 0 0\n1 0\n") ==
         "t.txt:2: found 2 values; expected 3 like line 1 (x y theta)");
-  CHECK(ErrorOf("1 2 3 4 5\n").starts_with("t.txt:1: found 5 values; expected a trajectory"));
-  CHECK(ErrorOf("0 0 0 0\n0 1 1 1\n") ==
+  CHECK(ReadError("1 2 3 4 5\n").starts_with("t.txt:1: found 5 values; expected a trajectory"));
+  CHECK(ReadError("0 0 0 0\n0 1 1 1\n") ==
         "t.txt:2: pose 0 is listed twice; expected one line per pose");
-  CHECK(ErrorOf("1 0 0 0 0 0 0 2\n").starts_with("t.txt:1: the quaternion has norm 2"));
-  CHECK(ErrorOf("# nothing\n") == "t.txt:1: no pose in the file");
+  CHECK(ReadError("1 0 0 0 0 0 0 2\n").starts_with("t.txt:1: the quaternion has norm 2"));
+  CHECK(ReadError("# nothing\n") == "t.txt:1: no pose in the file");
   // A repeated TUM row would pair every later pose with the wrong truth.
-  CHECK(ErrorOf("1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n") ==
+  CHECK(ReadError("1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n") ==
         "t.txt:3: timestamp 2.0 is not after line 2's; expected strictly increasing timestamps");
   // Asked for poses, a first line of 2 or 5 values (found by fuzzing: the
   // column count was trusted and indexed past the line).
-  CHECK(ErrorOf("1 2\n3 4\n", TrajectoryFormat::kPoses) ==
+  CHECK(ReadError("1 2\n3 4\n", TrajectoryFormat::kPoses) ==
         "t.txt:1: found 2 values; expected 3 (x y theta) or 4 (id x y theta)");
-  CHECK(ErrorOf("1 2 3 4 5\n", TrajectoryFormat::kPoses) ==
+  CHECK(ReadError("1 2 3 4 5\n", TrajectoryFormat::kPoses) ==
         "t.txt:1: found 5 values; expected 3 (x y theta) or 4 (id x y theta)");
-  CHECK(ErrorOf("EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n").find("pose 0 has no value") !=
+  CHECK(ReadError("EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n").find("pose 0 has no value") !=
         std::string::npos);
   CHECK_THROWS_WITH(ReadTrajectoryFile("/nonexistent/truth.txt"),
                     Catch::Contains("no such file; expected a trajectory"));

@@ -10,7 +10,7 @@
 namespace catgraph {
 namespace {
 
-std::string ErrorOf(const std::string& yaml) {
+std::string ScenarioError(const std::string& yaml) {
   try {
     ParseScenario(yaml, "my.yaml", ".");
   } catch (const FileError& e) {
@@ -64,23 +64,23 @@ TEST_CASE("a minimal scenario takes the documented defaults", "[simulation][scen
 
 TEST_CASE("scenario mistakes name the file and the line", "[simulation][scenario][bad-input]") {
   std::string yaml = kMinimal;
-  CHECK_THAT(ErrorOf(yaml + "colour: red\n"), Catch::Contains("my.yaml:6: unknown key 'colour'"));
-  CHECK_THAT(ErrorOf(yaml + "camera: {width_px: -3}\n"), Catch::Contains("my.yaml:6: camera: width_px: expected an integer in [2, 8192]"));
-  CHECK_THAT(ErrorOf(yaml + "seed: [1\n"), Catch::Contains("my.yaml:"));
-  CHECK_THAT(ErrorOf(yaml + "camera: {hfov_deg: wide}\n"), Catch::Contains("my.yaml:6: camera: hfov_deg: expected a number"));
+  CHECK_THAT(ScenarioError(yaml + "colour: red\n"), Catch::Contains("my.yaml:6: unknown key 'colour'"));
+  CHECK_THAT(ScenarioError(yaml + "camera: {width_px: -3}\n"), Catch::Contains("my.yaml:6: camera: width_px: expected an integer in [2, 8192]"));
+  CHECK_THAT(ScenarioError(yaml + "seed: [1\n"), Catch::Contains("my.yaml:"));
+  CHECK_THAT(ScenarioError(yaml + "camera: {hfov_deg: wide}\n"), Catch::Contains("my.yaml:6: camera: hfov_deg: expected a number"));
   // A route through the block.
   std::string through = kMinimal;
   through.replace(through.find("[9, 1]"), 6, "[9, 3]");
-  CHECK_THAT(ErrorOf(through), Catch::Contains("my.yaml:4: traversal 1: the route passes within"));
+  CHECK_THAT(ScenarioError(through), Catch::Contains("my.yaml:4: traversal 1: the route passes within"));
   // A route that stays at one point (a fuzzer's find: it escaped as std::invalid_argument).
   std::string still = kMinimal;
   still.replace(still.find("[9, 1]"), 6, "[1.0, 1]");
-  CHECK_THAT(ErrorOf(still), Catch::Contains("my.yaml:4: traversal 1: route: expected at least 2 distinct waypoints"));
+  CHECK_THAT(ScenarioError(still), Catch::Contains("my.yaml:4: traversal 1: route: expected at least 2 distinct waypoints"));
   // Furniture that changes outside every changed region.
-  CHECK_THAT(ErrorOf(yaml + "furniture:\n  - {name: crate, style: boxes, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("my.yaml:7: furniture 'crate' does not stand in every traversal"));
-  CHECK_THAT(ErrorOf(yaml + "furniture:\n  - {name: crate, style: crates, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("unknown furniture style 'crates'"));
-  CHECK_THAT(ErrorOf("name: x\nworld: atlantis\ntraversals: []\n"), Catch::Contains("my.yaml:2: world: 'atlantis' is neither"));
-  CHECK_THAT(ErrorOf("name: x\nworld: office\n"), Catch::Contains("missing key 'traversals'"));
+  CHECK_THAT(ScenarioError(yaml + "furniture:\n  - {name: crate, style: boxes, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("my.yaml:7: furniture 'crate' does not stand in every traversal"));
+  CHECK_THAT(ScenarioError(yaml + "furniture:\n  - {name: crate, style: crates, box: [4, 0.1, 5, 0.5], traversals: [1]}\n"), Catch::Contains("unknown furniture style 'crates'"));
+  CHECK_THAT(ScenarioError("name: x\nworld: atlantis\ntraversals: []\n"), Catch::Contains("my.yaml:2: world: 'atlantis' is neither"));
+  CHECK_THAT(ScenarioError("name: x\nworld: office\n"), Catch::Contains("missing key 'traversals'"));
 }
 
 TEST_CASE("an unknown scenario name lists the built-in ones", "[simulation][scenario][bad-input]") {

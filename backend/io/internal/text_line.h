@@ -40,6 +40,23 @@ inline std::vector<std::string_view> Tokenize(std::string_view line) {
   return tokens;
 }
 
+// The comma-separated fields of one CSV line, each without surrounding
+// whitespace (no quoting: catgraph's CSV files hold numbers and names).
+inline std::vector<std::string_view> SplitCsv(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    const std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
+    const std::size_t b = field.find_first_not_of(kWhitespace);
+    const std::size_t e = field.find_last_not_of(kWhitespace);
+    fields.push_back(b == std::string_view::npos ? std::string_view() : field.substr(b, e - b + 1));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return fields;
+}
+
 // One tokenised line with checked accessors that throw FileError.
 class Line {
  public:
