@@ -77,6 +77,12 @@ nlohmann::json ReportJson(const OptimizeOptions& o, const GraphFile& file, const
   j["readmitted"] = r.readmitted;
   j["readmit_test_time_s"] = r.readmit_test_time_s;
   j["readmit_time_s"] = r.readmit_test_time_s + (r.readmission ? r.readmission->time_s : 0.0);
+  // Every stage's wall-clock time (problems built included) and iterations.
+  j["wall_time_s"] = r.WallTimeS();
+  j["stages"] = nlohmann::json::array();
+  for (const StageTime& s : r.stages) {
+    j["stages"].push_back({{"stage", s.stage}, {"time_s", s.time_s}, {"iterations", s.iterations}});
+  }
   j["accepted"] = r.accepted;
   j["rejected"] = r.rejected;
   if (with_closures) {
@@ -139,11 +145,19 @@ void RunOptimize(OptimizeOptions options, std::ostream& out) {
         << "readmitted (--no-readmit to keep them out; test " << result.readmit_test_time_s
         << " s), refined again: " << result.readmission->BriefReport() << '\n';
   }
-  out
-      << "chi2 " << result.chi2 << ", chordal cost " << result.chordal_cost << "; loop closures: " << result.accepted << " accepted, "
-      << result.rejected << " rejected\n"
-      << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "")
-      << '\n';
+  out << "chi2 " << result.chi2 << ", chordal cost " << result.chordal_cost << "; loop closures: "
+      << result.accepted << " accepted, " << result.rejected << " rejected\n"
+      << "time by stage:";
+  const auto precision = out.precision(3);
+  const char* separator = " ";
+  for (const StageTime& s : result.stages) {
+    out << separator << s.stage << ' ' << s.time_s << " s";
+    if (s.iterations > 0) out << " (" << s.iterations << " iterations)";
+    separator = ", ";
+  }
+  out << "; " << result.WallTimeS() << " s in all\n";
+  out.precision(precision);
+  out << "wrote " << options.output << (options.drop_rejected ? " (rejected closures dropped)" : "") << '\n';
 }
 
 }  // namespace

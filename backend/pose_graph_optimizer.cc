@@ -289,12 +289,22 @@ InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, RelativePos
 
 template <typename PoseT>
 PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
+  PoseGraphOptimization out;
+  // Ends a stage: its time is the wall clock since the last stage ended.
+  auto stage_start = std::chrono::steady_clock::now();
+  auto end_stage = [&](const char* stage, int iterations) {
+    const auto now = std::chrono::steady_clock::now();
+    out.stages.push_back({stage, std::chrono::duration<double>(now - stage_start).count(), iterations});
+    stage_start = now;
+    return out.stages.back().time_s;
+  };
   const bool switchable = options.method == RobustMethod::kSwitchable;
   NoiseScaleEstimate noise_scale;
   double gate_factor = 1.0;
   if (options.estimate_noise_scale && options.method != RobustMethod::kNone) {
     noise_scale = EstimateNoiseScale(graph, options.noise_scale);
     if (noise_scale.scale >= options.noise_scale_threshold) gate_factor = noise_scale.scale;
+    end_stage("noise_scale", 0);
   }
   const double gate = gate_factor * Gate<PoseT>(options.cost, options.switch_gate_probability);
   RobustLoss loss = LossFor(options, gate);
@@ -304,12 +314,10 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   const bool any_robust = options.method != RobustMethod::kNone ||
                           std::any_of(graph.constraints.begin(), graph.constraints.end(),
                                       [](const auto& c) { return c.switch_id.has_value(); });
-  const auto init_start = std::chrono::steady_clock::now();
   const InitialGuess initial_guess = Initialize(
       graph, options.initial_guess, options.cost, any_robust ? gate : std::numeric_limits<double>::infinity(),
       [&](const Constraint<PoseT>& c) { return robust(c) || c.switch_id.has_value(); });
-  const double initial_guess_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - init_start).count();
+  const double initial_guess_time_s = end_stage("initial_guess", 0);
   const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
 
   // Closures the method decides (the rest carry the file's switches).
@@ -511,9 +519,9 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     };
   }
 
-  PoseGraphOptimization out;
   out.summary = solve_robustly(gate);
   out.closures = decide_all(nullptr);
+  end_stage("robust_solve", out.summary.iterations);
 
   // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the accepted
   // closures' own cycles measure the noise again; when it is Gaussian and
@@ -562,6 +570,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
         graph.switches = first_switches;
       }
     }
+    end_stage("narrow", out.narrowed ? out.narrowed->iterations : 0);
   }
   out.initial_guess = initial_guess;
   out.initial_guess_time_s = initial_guess_time_s;
@@ -610,7 +619,10 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     summary.SetTimes(times);
     return summary;
   };
-  if (options.refine && robust_solve && out.summary.IsUsable()) out.refinement = refine(true);
+  if (options.refine && robust_solve && out.summary.IsUsable()) {
+    out.refinement = refine(true);
+    end_stage("refine", out.refinement->iterations);
+  }
 
   // Readmission (PoseGraphOptimizerOptions::readmit): each closure the
   // method rejected is tested once more against the refined map, by its
@@ -642,6 +654,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
                          [&](SwitchId s) { return psi(graph.switches.at(s).value) > 0.5; });
     };
     Summary times;  // of the refinements
+    int iterations = 0;
     for (int round = 0; round < kReadmitRounds; ++round) {
       std::vector<ClosureDecision*> candidates;
       std::vector<const Constraint<PoseT>*> tested;
@@ -677,6 +690,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       }
       Summary refined = refine(false);
       times.AddTimes(refined);
+      iterations += refined.iterations;
       if (!refined.IsUsable()) {  // the last map and its decisions stand
         out.closures = decisions_before;
         graph.switches = switches_before;
@@ -687,6 +701,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       out.readmission = refined;
     }
     if (out.readmission) out.readmission->SetTimes(times);
+    end_stage("readmit", iterations);
   }
   for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
   // The decisions travel with the graph, so that a reader of the written
@@ -702,6 +717,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   out.chi2 = GraphChi2(graph);
   out.chordal_cost = GraphChordalCost(graph);
   out.graph = std::move(graph);
+  end_stage("costs", 0);
   return out;
 }
 
@@ -770,6 +786,12 @@ PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
                                         const PoseGraphOptimizerOptions& options) {
   Validate(options);
   return std::visit([&](const auto& g) { return Run(g, options); }, graph);
+}
+
+double PoseGraphOptimization::WallTimeS() const {
+  double total = 0.0;
+  for (const StageTime& s : stages) total += s.time_s;
+  return total;
 }
 
 double ChordalCost(const AnyPoseGraph& graph) {

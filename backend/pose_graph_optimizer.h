@@ -202,6 +202,18 @@ struct ClosureDecision {
   bool readmitted = false;
 };
 
+// One stage of OptimizePoseGraph and its wall-clock time: everything the
+// stage does, building its problems included.
+struct StageTime {
+  // noise_scale, initial_guess, robust_solve, narrow (the inliers' noise
+  // measured and, when it ran, the second robust solve), refine, readmit (the
+  // innovation tests and the refinements after them), costs (chi2 and the
+  // chordal cost of the result).
+  std::string stage;
+  double time_s = 0.0;
+  int iterations = 0;  // solver iterations; 0 for a stage that solves nothing
+};
+
 struct PoseGraphOptimization {
   // The input with optimised poses; with switches (new and old) and their
   // solved values; new switches are attached to their constraints.
@@ -250,6 +262,10 @@ struct PoseGraphOptimization {
     return times;
   }
   double TotalTimeS() const { return SolveTimes().time_s; }
+  // The stages that ran, in order: from the noise scale to the result's costs,
+  // the whole solve but for copying the input.
+  std::vector<StageTime> stages;
+  double WallTimeS() const;
   std::vector<ClosureDecision> closures;  // every loop closure, in graph order
   std::size_t accepted = 0;
   std::size_t rejected = 0;

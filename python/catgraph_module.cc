@@ -401,6 +401,15 @@ void BindOptimizer(py::module_& m) {
       .def_readonly("accepted", &ClosureDecision::accepted)
       .def_readonly("readmitted", &ClosureDecision::readmitted);
 
+  py::class_<StageTime>(m, "StageTime", "One stage of a robust solve: its wall-clock time and iterations.")
+      .def_readonly("stage", &StageTime::stage)
+      .def_readonly("time_s", &StageTime::time_s)
+      .def_readonly("iterations", &StageTime::iterations)
+      .def("__repr__", [](const StageTime& s) {
+        return "StageTime(" + s.stage + ", " + std::to_string(s.time_s) + " s, " + std::to_string(s.iterations) +
+               " iterations)";
+      });
+
   py::class_<PoseGraphOptimization>(m, "Optimization", "A robust solve: the corrected graph and every decision.")
       .def_property_readonly("graph", [](const PoseGraphOptimization& o) { return PyPoseGraph{o.graph}; })
       .def_readonly("closures", &PoseGraphOptimization::closures)
@@ -411,7 +420,9 @@ void BindOptimizer(py::module_& m) {
       .def_readonly("chi2", &PoseGraphOptimization::chi2)
       .def_property_readonly("initial_guess",
                              [](const PoseGraphOptimization& o) { return std::string(ToString(o.initial_guess)); })
-      .def_property_readonly("time_s", &PoseGraphOptimization::TotalTimeS, "every solve and test together");
+      .def_property_readonly("time_s", &PoseGraphOptimization::TotalTimeS, "every solve and test together")
+      .def_readonly("stages", &PoseGraphOptimization::stages, "the stages that ran, in order")
+      .def_property_readonly("wall_time_s", &PoseGraphOptimization::WallTimeS, "the stages' times together");
 
   m.def(
       "optimize",

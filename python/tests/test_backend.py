@@ -96,6 +96,10 @@ def test_optimize_matches_the_command_line(tmp_path):
     cli = cg.read_graph(tmp_path / "cli.g2o")
     assert np.allclose(ours.graph.poses(), cli.poses(), atol=1e-6)
     assert [c.accepted for c in ours.graph.loop_closures()] == [c.accepted for c in cli.loop_closures()]
+    stages = [s.stage for s in ours.stages]
+    assert stages[:3] == ["noise_scale", "initial_guess", "robust_solve"] and stages[-1] == "costs"
+    assert ours.stages[2].iterations == ours.summary.iterations
+    assert ours.wall_time_s == pytest.approx(sum(s.time_s for s in ours.stages))
 
 
 def test_bad_input_raises_named_errors(tmp_path):

@@ -175,6 +175,24 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   REQUIRE(last_arrow != std::string::npos);
   CHECK(stages.at("final_cost").get<double>() == Approx(std::stod(text.out.substr(last_arrow + 3))).epsilon(1e-5));
   CHECK(stages.at("robust_final_cost").get<double>() != stages.at("final_cost").get<double>());
+  // Each stage's wall-clock time and iterations, in the order they ran; they
+  // hold every solve's time and the initial guess's.
+  std::vector<std::string> names;
+  double wall = 0.0;
+  for (const auto& s : stages.at("stages")) {
+    names.push_back(s.at("stage"));
+    wall += s.at("time_s").get<double>();
+    if (s.at("stage") == "robust_solve") CHECK(s.at("iterations") == stages.at("iterations"));
+    if (s.at("stage") == "refine") CHECK(s.at("iterations") == stages.at("refine_iterations"));
+    if (s.at("stage") == "initial_guess") CHECK(s.at("time_s") == stages.at("initial_guess_time_s"));
+  }
+  // Narrowing measures the accepted closures' noise, and keeps the first
+  // solve here (narrowed false): readmission runs.
+  CHECK(names == std::vector<std::string>{"noise_scale", "initial_guess", "robust_solve", "narrow", "refine",
+                                          "readmit", "costs"});
+  CHECK(stages.at("wall_time_s").get<double>() == Approx(wall));
+  CHECK(wall >= stages.at("time_s").get<double>() + stages.at("initial_guess_time_s").get<double>());
+  CHECK(text.out.find("time by stage: noise_scale ") != std::string::npos);
   // The time's breakdown: parts of time_s (robust solve and refinement).
   double parts = 0.0;
   for (const char* key : {"preprocessor_time_s", "linear_solver_time_s", "jacobian_time_s",

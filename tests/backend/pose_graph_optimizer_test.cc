@@ -4,6 +4,7 @@
 #include <optional>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -431,6 +432,52 @@ TEST_CASE("readmission brings back the true closures the gate rejected and no fa
     }
     CHECK(flagged == r.readmitted);
   }
+}
+
+TEST_CASE("the solve reports the stages it ran, in order, with their iterations and times",
+          "[backend][stages]") {
+  const auto [sim, injected] = SpoiledManhattanWorld(300, 5, 20, 2, OutlierPolicy::kLocal);
+  auto names = [](const PoseGraphOptimization& r) {
+    std::vector<std::string> out;
+    for (const StageTime& s : r.stages) out.push_back(s.stage);
+    return out;
+  };
+  auto iterations_of = [](const PoseGraphOptimization& r, const std::string& stage) {
+    for (const StageTime& s : r.stages) {
+      if (s.stage == stage) return s.iterations;
+    }
+    return -1;
+  };
+  auto check_times = [&names](const PoseGraphOptimization& r) {
+    double sum = 0.0;
+    for (const StageTime& s : r.stages) {
+      CHECK(s.time_s >= 0.0);
+      sum += s.time_s;
+    }
+    CHECK(r.WallTimeS() == Approx(sum));
+    // The stages' wall clock holds every solve Ceres timed.
+    CHECK(r.WallTimeS() >= r.TotalTimeS());
+    CHECK(r.initial_guess_time_s == r.stages.at(names(r)[0] == "noise_scale" ? 1 : 0).time_s);
+  };
+
+  PoseGraphOptimizerOptions options;
+  options.narrow_gate = false;
+  const PoseGraphOptimization r = OptimizePoseGraph(sim.graph, options);
+  REQUIRE(r.refinement);
+  CHECK(names(r) == std::vector<std::string>{"noise_scale", "initial_guess", "robust_solve", "refine",
+                                              "readmit", "costs"});
+  CHECK(iterations_of(r, "robust_solve") == r.summary.iterations);
+  CHECK(iterations_of(r, "refine") == r.refinement->iterations);
+  CHECK(iterations_of(r, "initial_guess") == 0);
+  if (r.readmission) CHECK(iterations_of(r, "readmit") >= r.readmission->iterations);
+  check_times(r);
+
+  // Plain least squares: no noise scale, no refinement, no readmission.
+  options.method = RobustMethod::kNone;
+  const PoseGraphOptimization plain = OptimizePoseGraph(sim.graph, options);
+  CHECK(names(plain) == std::vector<std::string>{"initial_guess", "robust_solve", "costs"});
+  CHECK(iterations_of(plain, "robust_solve") == plain.summary.iterations);
+  check_times(plain);
 }
 
 TEST_CASE("chordal initialisation recovers exact poses from exact measurements",
