@@ -180,7 +180,7 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
   std::vector<std::string> names;
   double wall = 0.0;
   for (const auto& s : stages.at("stages")) {
-    names.push_back(s.at("stage"));
+    names.push_back(s.at("stage").get<std::string>());
     wall += s.at("time_s").get<double>();
     if (s.at("stage") == "robust_solve") CHECK(s.at("iterations") == stages.at("iterations"));
     if (s.at("stage") == "refine") CHECK(s.at("iterations") == stages.at("refine_iterations"));
