@@ -186,8 +186,8 @@ TEST_CASE("catgraph optimize writes the corrected graph and reports the public k
     if (s.at("stage") == "refine") CHECK(s.at("iterations") == stages.at("refine_iterations"));
     if (s.at("stage") == "initial_guess") CHECK(s.at("time_s") == stages.at("initial_guess_time_s"));
   }
-  // Narrowing measures the accepted closures' noise, and keeps the first
-  // solve here (narrowed false): readmission runs.
+  // Narrowing measures the accepted closures' noise and, finding it as
+  // stated, runs no second solve here, so readmission runs.
   CHECK(names == std::vector<std::string>{"noise_scale", "initial_guess", "robust_solve", "narrow", "refine",
                                           "readmit", "costs"});
   CHECK(stages.at("wall_time_s").get<double>() == Approx(wall));
