@@ -251,32 +251,63 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
                              "(no variable held constant, or one the factors do not determine)");
   }
   // The joint covariance of (a, b) is E^T H^-1 E = Y^T Y for the columns E
-  // of the identity at a and b and Y = L^-1 P E: a forward solve whose right
-  // side is sparse, so it touches only the factor's columns on the paths
-  // from a and b to the root of the elimination tree.
+  // of the identity at a and b and Y = L^-1 P E. A column of L has its
+  // nonzeros only at ancestors of its own index in the elimination tree, so
+  // Y is nonzero only on the union of the tree paths from a's and b's
+  // columns to the root: the forward solve runs on those rows alone, at a
+  // cost of the factor's entries in their columns (not of n per column, as
+  // a general sparse solve would).
+  const Eigen::SparseMatrix<double>& factor = llt.matrixL().nestedExpression();
+  std::vector<int> parent(n, -1);  // the elimination tree
+  for (int j = 0; j < n; ++j) {
+    Eigen::SparseMatrix<double>::InnerIterator entry(factor, j);
+    if (!entry || entry.row() != j) {
+      throw std::logic_error("JointMarginalCovariances: the factor's diagonal is not stored first");
+    }
+    if (++entry) parent[j] = static_cast<int>(entry.row());
+  }
+  std::vector<int> local(n, -1);  // row of `y` of each row of the factor on the paths
+  std::vector<int> path;
   std::vector<Eigen::MatrixXd> out;
   for (const auto& [a, b] : pairs) {
     const int na = TangentSize(values.KindOf(a)), nb = TangentSize(values.KindOf(b));
     Eigen::MatrixXd joint = Eigen::MatrixXd::Zero(na + nb, na + nb);
-    std::vector<Eigen::Triplet<double>> columns;
-    std::vector<int> free;  // rows of `joint` of the variables not held constant
+    std::vector<int> starts;  // permuted row of each free tangent coordinate
+    std::vector<int> free;    // its row in `joint`
     for (const auto& [key, first, size] : {std::tuple{a, 0, na}, std::tuple{b, na, nb}}) {
       const auto found = offset.find(key);
       if (found == offset.end()) continue;  // held constant: zero covariance
       for (int k = 0; k < size; ++k) {
-        const int permuted = llt.permutationP().indices()(found->second + k);
-        columns.emplace_back(permuted, static_cast<int>(free.size()), 1.0);
+        starts.push_back(llt.permutationP().indices()(found->second + k));
         free.push_back(first + k);
       }
     }
-    if (!free.empty()) {
-      Eigen::SparseMatrix<double> y(n, static_cast<int>(free.size()));
-      y.setFromTriplets(columns.begin(), columns.end());
-      llt.matrixL().solveInPlace(y);
-      const Eigen::MatrixXd cov = Eigen::MatrixXd(Eigen::SparseMatrix<double>(y.transpose() * y));
-      for (std::size_t r = 0; r < free.size(); ++r) {
-        for (std::size_t c = 0; c < free.size(); ++c) joint(free[r], free[c]) = cov(r, c);
+    if (free.empty()) {
+      out.push_back(std::move(joint));
+      continue;
+    }
+    path.clear();
+    for (const int start : starts) {
+      for (int j = start; j != -1 && local[j] == -1; j = parent[j]) {
+        local[j] = 0;
+        path.push_back(j);
       }
+    }
+    std::sort(path.begin(), path.end());  // ancestors have higher indices
+    for (std::size_t r = 0; r < path.size(); ++r) local[path[r]] = static_cast<int>(r);
+    using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    RowMajorMatrix y = RowMajorMatrix::Zero(static_cast<Eigen::Index>(path.size()),
+                                            static_cast<Eigen::Index>(free.size()));
+    for (std::size_t c = 0; c < starts.size(); ++c) y(local[starts[c]], static_cast<Eigen::Index>(c)) = 1.0;
+    for (const int j : path) {
+      Eigen::SparseMatrix<double>::InnerIterator entry(factor, j);
+      y.row(local[j]) /= entry.value();  // the diagonal, stored first
+      for (++entry; entry; ++entry) y.row(local[entry.row()]) -= entry.value() * y.row(local[j]);
+    }
+    for (const int j : path) local[j] = -1;
+    const Eigen::MatrixXd cov = y.transpose() * y;
+    for (std::size_t r = 0; r < free.size(); ++r) {
+      for (std::size_t c = 0; c < free.size(); ++c) joint(free[r], free[c]) = cov(r, c);
     }
     out.push_back(std::move(joint));
   }

@@ -81,8 +81,9 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
 // `b` ([a; b] in their tangent spaces) of the Gaussian the factors define
 // when linearised at `values` (robust losses ignored). Constant variables
 // have zero covariance; variables no factor reaches are left out. Computed
-// from one sparse Cholesky factorisation of the information sum J^T J and a
-// sparse forward solve per pair. Throws std::runtime_error when it does not
+// from one sparse Cholesky factorisation of the information sum J^T J and,
+// per pair, a forward solve on the rows of the factor the pair's columns
+// reach (their paths to the root of the elimination tree). Throws std::runtime_error when it does not
 // exist (the information matrix is singular: no variable held constant, or
 // one the factors do not determine); std::invalid_argument for a key that
 // is not in `values` or that no factor reaches.

@@ -1,15 +1,22 @@
 // Robust optimisation of Vertigo's Manhattan (g2o version) with 0, 100 and
 // 1000 random false closures, per method; and of SE-Sync's 3D benchmarks,
-// clean, plain and switchable. Counters say where the time goes.
+// clean, plain and switchable. Counters say where the time goes. Then the
+// joint marginals readmission tests closures by, on generated worlds.
 //   build/bench/catgraph_bench_optimize --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 //   build/bench/catgraph_bench_optimize --benchmark_filter=3D
+//   build/bench/catgraph_bench_optimize --benchmark_filter=JointMarginals
 #include <filesystem>
 #include <optional>
+#include <random>
+#include <utility>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "backend/io/graph_io.h"
+#include "backend/optimizer.h"
 #include "backend/pose_graph_optimizer.h"
+#include "simulation/manhattan_world.h"
 #include "simulation/outlier_injection.h"
 
 namespace catgraph {
@@ -90,6 +97,29 @@ CATGRAPH_OPTIMIZE_3D_BENCH(sphere_bignoise, "se-sync/sphere_bignoise_vertex3.g2o
 CATGRAPH_OPTIMIZE_3D_BENCH(parking_garage, "se-sync/parking-garage.g2o");
 CATGRAPH_OPTIMIZE_3D_BENCH(torus3D, "se-sync/torus3D.g2o");
 CATGRAPH_OPTIMIZE_3D_BENCH(cubicle, "se-sync/cubicle.g2o");
+
+// The joint marginal covariances of 1000 random pairs of poses of a
+// generated Manhattan world of state.range(0) poses, at its true poses, its
+// first pose held constant (as readmission tests 1000 rejected closures).
+void BM_JointMarginals(benchmark::State& state) {
+  ManhattanWorldOptions world;
+  world.num_poses = static_cast<int>(state.range(0));
+  const PoseGraph2 truth = SimulateManhattanWorld(world).truth;
+  Values values;
+  FactorGraph graph;
+  for (const auto& [id, vertex] : truth.vertices) values.Insert(id, *vertex.pose);
+  for (const auto& c : truth.constraints) graph.Emplace<BetweenFactor<Pose2>>(c.from, c.to, c.measurement);
+  graph.SetConstant(PoseKey(truth.vertices.begin()->first));
+  std::mt19937 rng(1);
+  std::uniform_int_distribution<int> pose(0, world.num_poses - 1);
+  std::vector<std::pair<Key, Key>> pairs;
+  for (int k = 0; k < 1000; ++k) pairs.emplace_back(PoseKey(PoseId(pose(rng))), PoseKey(PoseId(pose(rng))));
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(JointMarginalCovariances(graph, values, pairs));
+  }
+  state.counters["edges"] = static_cast<double>(truth.constraints.size());
+}
+BENCHMARK(BM_JointMarginals)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace catgraph
