@@ -1209,22 +1209,25 @@ TEST_CASE("every stage of the demo on a short office: no wrong visual closure, t
   std::filesystem::remove_all(root);
 }
 
-// The short office at 3 frames/s (375 frames): what the sanitizer build runs
+// The short office at fewer frames per second: what the sanitizer build runs
 // of the mapping pipeline, where the [slow] tests above are left to the
 // release build (tests/CMakeLists.txt). These check that every stage runs and
-// writes what it promises; the tests above check accuracy.
-std::filesystem::path WriteSmallOffice(const std::filesystem::path& root) {
+// writes what it promises; the tests above check accuracy. At 3 frames/s
+// (375 frames) CAT-Graph+ still infers closures; at 2.5 (313 frames) false
+// visual matches still fit for the hierarchy experiment.
+std::filesystem::path WriteSmallOffice(const std::filesystem::path& root, const std::string& frame_rate_hz) {
   std::string scenario = testing::ReadText(testing::Fixture("office-change-short.yaml"));
   const std::string rate = "frame_rate_hz: 5.0";
   REQUIRE(scenario.find(rate) != std::string::npos);
-  scenario.replace(scenario.find(rate), rate.size(), "frame_rate_hz: 3.0");
+  scenario.replace(scenario.find(rate), rate.size(), "frame_rate_hz: " + frame_rate_hz);
   std::ofstream(root / "office-small.yaml") << scenario;
   return root / "office-small.yaml";
 }
 
-TEST_CASE("demo runs on a 375-frame office and writes its outputs", "[apps][localize][map]") {
+TEST_CASE("demo runs on a 375-frame office and writes its outputs", "[apps][localize][map][small-office]") {
   const auto root = testing::TempDir("demo_small");
-  const Result demo = Run({"demo", "-o", root.string(), "--scenario", WriteSmallOffice(root).string(), "--quiet"});
+  const Result demo =
+      Run({"demo", "-o", root.string(), "--scenario", WriteSmallOffice(root, "3.0").string(), "--quiet"});
   INFO(demo.out << demo.err);
   REQUIRE(demo.status == 0);
   CHECK(demo.out.find("375 frames over two traversals") != std::string::npos);
@@ -1250,15 +1253,16 @@ TEST_CASE("demo runs on a 375-frame office and writes its outputs", "[apps][loca
   std::filesystem::remove_all(root);
 }
 
-TEST_CASE("sad-match, evidence, inference-sweep and hierarchy-experiment run on a 375-frame office and write "
+TEST_CASE("sad-match, evidence, inference-sweep and hierarchy-experiment run on a 313-frame office and write "
           "their tables",
-          "[apps][localize]") {
+          "[apps][localize][small-office]") {
   const auto root = testing::TempDir("analysis_small");
   const auto data = root / "office";
   const Result simulate =
-      Run({"simulate", "--scenario", WriteSmallOffice(root).string(), "-o", data.string(), "--quiet"});
+      Run({"simulate", "--scenario", WriteSmallOffice(root, "2.5").string(), "-o", data.string(), "--quiet"});
   INFO(simulate.out << simulate.err);
   REQUIRE(simulate.status == 0);
+  REQUIRE(ReadDataset(data).frames.size() == 313);
   for (const std::vector<std::string>& command :
        {std::vector<std::string>{"sad-match", data.string(), "-o", (root / "sad").string()},
         {"evidence", data.string(), "-o", (root / "evidence").string(), "--quiet"},

@@ -249,7 +249,7 @@ TEST_CASE("the narrowed solve keeps the hierarchy's policies: disabled closures 
 }
 
 TEST_CASE("true closures with heavier tails than one Gaussian keep the first gate",
-          "[backend][noise-scale][switchable]") {
+          "[backend][noise-scale][switchable][slow]") {
   ManhattanWorldOptions world;
   world.num_poses = 2000;
   world.seed = 3;
@@ -342,7 +342,7 @@ TEST_CASE("Vertigo's Manhattan + 1000 outliers: the narrowed gate rejects the lo
 // (Manhattan's last one in the second round).
 TEST_CASE("real front ends' heavier tails keep the first gate, and readmission keeps every closure of "
           "Vertigo's Intel and SE-Sync's Manhattan",
-          "[backend][noise-scale][readmit][shared]") {
+          "[backend][noise-scale][readmit][shared][slow]") {
   CATGRAPH_SHARED_POSE_GRAPHS_OR_SKIP(root);
   for (const auto& [file, gated] : {std::pair{"vertigo/intel/originalDataset/intel.g2o", 3},
                                     std::pair{"se-sync/manhattan.g2o", 22}}) {
