@@ -1,10 +1,12 @@
 // Robust optimisation of Vertigo's Manhattan (g2o version) with 0, 100 and
 // 1000 random false closures, per method; and of SE-Sync's 3D benchmarks,
 // clean, plain and switchable. Counters say where the time goes. Then the
-// joint marginals readmission tests closures by, on generated worlds.
+// joint marginals readmission tests closures by, and whole solves of a
+// generated world of City10000's shape with each stage's seconds.
 //   build/bench/catgraph_bench_optimize --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 //   build/bench/catgraph_bench_optimize --benchmark_filter=3D
 //   build/bench/catgraph_bench_optimize --benchmark_filter=JointMarginals
+//   build/bench/catgraph_bench_optimize --benchmark_filter=CityShaped
 #include <filesystem>
 #include <optional>
 #include <random>
@@ -120,6 +122,26 @@ void BM_JointMarginals(benchmark::State& state) {
   state.counters["edges"] = static_cast<double>(truth.constraints.size());
 }
 BENCHMARK(BM_JointMarginals)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// A generated world of City10000's shape (10,000 poses on a 50-step square:
+// 21,603 edges, City10000 has 20,687) with state.range(0) random false
+// closures, solved with the defaults; a counter per stage in seconds.
+void BM_OptimizeCityShaped(benchmark::State& state) {
+  ManhattanWorldOptions world;
+  world.num_poses = 10'000;
+  world.grid_cells = 50;
+  AnyPoseGraph graph = SimulateManhattanWorld(world).graph;
+  OutlierOptions outliers;
+  outliers.count = static_cast<int>(state.range(0));
+  InjectOutliers(graph, outliers);
+  PoseGraphOptimization result;
+  for (auto _ : state) {
+    result = OptimizePoseGraph(graph, PoseGraphOptimizerOptions{});
+  }
+  SetCounters(state, result);
+  for (const StageTime& stage : result.stages) state.counters[stage.stage + "_stage_s"] = stage.time_s;
+}
+BENCHMARK(BM_OptimizeCityShaped)->Arg(0)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace catgraph
