@@ -205,12 +205,13 @@ void WriteLocalization(const std::filesystem::path& dir, const Dataset& d, const
   CreateDirectories(dir, "output directory");
   WriteFileAtomically(dir / "hypotheses.csv", [&](std::ostream& f) {
     f << "frame,traversal,edge_from_frame,edge_to_frame,alpha,direction,hypothesis,new_place,closure,"
-         "matched_frame,error_m,inference_pending,log_evidence\n";
+         "matched_frame,error_m,inference_pending,log_evidence,self_evidence\n";
     for (const auto& h : r.frames) {
       f << h.frame << ',' << h.traversal << ',' << h.edge_from_frame << ',' << h.edge_to_frame << ','
         << Number(h.best.alpha) << ',' << h.best.direction << ',' << Number(h.best.value) << ','
         << Number(h.new_place_probability) << ',' << (h.closure ? 1 : 0) << ',' << h.matched_frame << ','
-        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << ',' << Number(h.log_evidence) << '\n';
+        << Number(h.error_m) << ',' << (h.inference_pending ? 1 : 0) << ',' << Number(h.log_evidence) << ','
+        << Number(h.self_evidence) << '\n';
     }
   });
   nlohmann::ordered_json closures = nlohmann::ordered_json::array();
@@ -406,6 +407,11 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "A visual closure also needs the frame's evidence to be this fraction of its self-evidence or more "
                  "(0: T_h alone, the spec). docs/frontend.md \"Closing on what the camera sees\"")
       ->check(Fraction(true))
+      ->capture_default_str();
+  cmd.add_option("--closure-evidence-window", f.closure_evidence_window_m,
+                 "... with evidence and self-evidence summed over this much path up to the frame, which must itself "
+                 "score above new place (m; 0: the frame alone). docs/frontend.md \"Closing on what the camera sees\"")
+      ->check(NonNegative())
       ->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
   AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),

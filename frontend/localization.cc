@@ -193,6 +193,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     f.best = step.best;
     f.new_place_probability = step.new_place_probability;
     f.log_evidence = step.log_evidence;
+    f.self_evidence = step.self_evidence;
     if (step.best.edge >= 0) {
       f.edge_from_frame = frame_of(filter.graph().edge(step.best.edge).from);
       f.edge_to_frame = frame_of(filter.graph().edge(step.best.edge).to);

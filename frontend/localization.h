@@ -33,6 +33,7 @@ struct FrameLocalization {
   int edge_from_frame = -1, edge_to_frame = -1;  // frames of the best edge's ends; -1: none
   double new_place_probability = 1.0;
   double log_evidence = 0.0;      // CatGraphStep::log_evidence
+  double self_evidence = 0.0;     // CatGraphStep::self_evidence
   bool closure = false;
   int matched_frame = -1;         // frame of the matched node (closures)
   double error_m = kNoError;      // best hypothesis against ground truth

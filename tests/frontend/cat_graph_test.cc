@@ -469,6 +469,7 @@ ChangedRingRun RunChangedRing(const ChangedRing& ring) {
     const double t = 0.25 * k + (ring.gap_frame >= 0 && k >= ring.gap_frame ? 100.0 : 0.0);
     run.steps.push_back(filter.Step(k, t, k == 0 ? Pose2() : u, z));
     run.self_evidence.push_back(model.ForFrame(z).SelfEvidence(z));
+    CHECK(run.steps.back().self_evidence == Approx(run.self_evidence.back()).margin(1e-9));
   }
   run.graph = filter.graph();
   return run;
