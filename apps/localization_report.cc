@@ -408,11 +408,6 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
                  "(0: T_h alone, the spec). docs/frontend.md \"Closing on what the camera sees\"")
       ->check(Fraction(true))
       ->capture_default_str();
-  cmd.add_option("--closure-evidence-window", f.closure_evidence_window_m,
-                 "... with evidence and self-evidence summed over this much path up to the frame, which must itself "
-                 "score above new place (m; 0: the frame alone). docs/frontend.md \"Closing on what the camera sees\"")
-      ->check(NonNegative())
-      ->capture_default_str();
   cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
   AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),
                  "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)",

@@ -71,9 +71,6 @@ void Validate(const CatGraphOptions& o) {
   }
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
   if (!(o.closure_min_evidence >= 0.0 && o.closure_min_evidence <= 1.0)) fail("closure_min_evidence must be in [0, 1]");
-  if (!(o.closure_evidence_window_m >= 0.0 && std::isfinite(o.closure_evidence_window_m))) {
-    fail("closure_evidence_window_m must be finite and >= 0");
-  }
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
   if (!IsValidSigma(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
   if (o.new_place_motion_sigma && !IsValidSigma(*o.new_place_motion_sigma)) {
@@ -544,7 +541,8 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   const bool seen = !(options_.forward_camera && step.best.direction < 0);
   // Nor is a cloud that scores little on what the camera sees (NaN, no
   // particle on the map, fails too).
-  const bool recognised = Recognised(step, restart) || options_.closure_min_evidence == 0.0;
+  const bool recognised =
+      options_.closure_min_evidence == 0.0 || step.log_evidence >= options_.closure_min_evidence * self_evidence;
   const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold && seen && recognised;
   if (aliasing.false_match >= 0 || (confident && !aliasing.withhold_closure)) {
     step.closure = true;
@@ -578,22 +576,6 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   }
   if (options_.odometric_inference) OdometricStep(restart ? Pose2() : u, step.closure && !aliasing.vetoed, step);
   return step;
-}
-
-bool CatGraphFilter::Recognised(const CatGraphStep& step, bool restart) {
-  // The window holds the frames since the cloud last came onto the map (half
-  // the mass or more there; NaN evidence: no particle on it).
-  if (restart || mapped_mass_ < 0.5 || std::isnan(step.log_evidence)) evidence_window_.clear();
-  if (std::isnan(step.log_evidence)) return false;
-  if (options_.closure_evidence_window_m == 0.0) evidence_window_.clear();
-  evidence_window_.push_back({path_length_m_, step.log_evidence, step.self_evidence});
-  while (path_length_m_ - evidence_window_.front().path_m > options_.closure_evidence_window_m) {
-    evidence_window_.pop_front();
-  }
-  double evidence = 0.0, self_evidence = 0.0;
-  for (const EvidenceSample& s : evidence_window_) evidence += s.evidence, self_evidence += s.self_evidence;
-  // The frame itself must be no likelier a new place than this one.
-  return step.log_evidence >= 0.0 && evidence >= options_.closure_min_evidence * self_evidence;
 }
 
 std::optional<Pose2> CatGraphFilter::HypothesisPose(const LocationHypothesis& h) const {

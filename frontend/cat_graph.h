@@ -30,7 +30,6 @@
 #define CATGRAPH_FRONTEND_CAT_GRAPH_H_
 
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <optional>
 #include <random>
@@ -93,14 +92,6 @@ struct CatGraphOptions {
   // through a changed place is still no recognition. [0, 1]; 0: Eq 4 and
   // T_h alone (the spec).
   double closure_min_evidence = 0.2;
-  // ... summed over the frames of this much path up to the current one
-  // [D, docs/frontend.md "Closing on what the camera sees"]: the evidence
-  // against new place and the self-evidence are each summed while the cloud
-  // stays on the map, and the frame itself must score above new place. A
-  // weak model (a holistic one on real images) recognises a stretch of
-  // path where no single frame is conclusive. >= 0, finite; 0: the frame
-  // alone.
-  double closure_evidence_window_m = 0.0;
   double hypothesis_radius_m = 1.0;        // d_h; > 0
   // Q = diag(σ)², per frame (m, m, rad); > 0. The heading's σ is wider than
   // the odometry's own heading noise so that the cloud follows a corner the
@@ -367,9 +358,6 @@ class CatGraphFilter {
   void OdometricStep(const Pose2& u, bool closure, CatGraphStep& step);
   // O from V at a visual closure matched at `match` (§3.5; CatGraphOptions).
   void ReinitialiseOdometric(const LocationHypothesis& match);
-  // The closure gate on what the camera sees (closure_min_evidence over
-  // closure_evidence_window_m); adds the step's evidence to the window.
-  bool Recognised(const CatGraphStep& step, bool restart);
 
   // The eligible nodes' observations ScoreFrame is given, evenly spread
   // (up to the model's PlacesWanted()).
@@ -403,12 +391,6 @@ class CatGraphFilter {
   double mapped_mass_ = 0.0;
   bool closed_since_entry_ = false;        // a visual closure since the mass came onto the map
   int total_path_failures_ = 0;            // closures in a row the pending chain was carried past
-  // The closure gate's window: (path length, evidence, self-evidence) of the
-  // frames since the cloud came onto the map, at most closure_evidence_window_m back.
-  struct EvidenceSample {
-    double path_m, evidence, self_evidence;
-  };
-  std::deque<EvidenceSample> evidence_window_;
 
   // CAT-Graph+ state (spec §3.2).
   std::vector<Particle> odometric_;        // the odometric particle set O
