@@ -620,7 +620,10 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     return summary;
   };
   if (options.refine && robust_solve && out.summary.IsUsable()) {
-    out.refinement = refine(true);
+    // With nothing rejected, the robust solve ran from the initial guess
+    // with every closure near full weight, the refinement's own problem: a
+    // second start from the initial guess ends where the first does.
+    out.refinement = refine(/*from_initial_guess=*/!RejectedIds(out.closures).empty());
     end_stage("refine", out.refinement->iterations);
   }
 
