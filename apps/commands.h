@@ -23,6 +23,7 @@ void AddExportCommand(CLI::App& app, std::ostream& out);
 void AddSweepCommand(CLI::App& app, std::ostream& out);
 void AddSimulateCommand(CLI::App& app, std::ostream& out);
 void AddConvertCommand(CLI::App& app, std::ostream& out);
+void AddImportCommand(CLI::App& app, std::ostream& out);
 void AddPlotDatasetCommand(CLI::App& app, std::ostream& out);
 void AddVocabularyCommand(CLI::App& app, std::ostream& out);
 void AddLocalizeCommand(CLI::App& app, std::ostream& out);

@@ -17,7 +17,7 @@ struct InfoOptions {
   bool json = false;
 };
 
-std::string KindCounts(const GraphSummary& s) {
+std::string FormatKindCounts(const GraphSummary& s) {
   std::string text;
   for (const auto& [kind, count] : s.edges_by_kind) {
     if (!text.empty()) text += ", ";
@@ -68,7 +68,7 @@ void RunInfo(const InfoOptions& options, std::ostream& out) {
       << s.loop_closures << " loop closures; " << s.switchable_edges << " switchable, "
       << s.maxmix_edges << " max-mixture)\n"
       << "switches:      " << s.switches << '\n'
-      << "closure kinds: " << KindCounts(s) << '\n'
+      << "closure kinds: " << FormatKindCounts(s) << '\n'
       << "connected:     " << (s.connected ? "yes" : "no") << " (" << s.connected_components
       << (s.connected_components == 1 ? " component)\n" : " components)\n");
   WriteSelfEdgeNote(out, options.file, file);

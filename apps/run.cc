@@ -102,6 +102,7 @@ void AddAllCommands(CLI::App& app, std::ostream& out) {
   AddExportCommand(app, out);
   AddSimulateCommand(app, out);
   AddConvertCommand(app, out);
+  AddImportCommand(app, out);
   AddPlotDatasetCommand(app, out);
   AddVocabularyCommand(app, out);
   AddLocalizeCommand(app, out);

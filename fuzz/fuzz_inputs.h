@@ -10,6 +10,9 @@
 
 #include <unistd.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -26,6 +29,7 @@
 #include "backend/io/image_file.h"
 #include "backend/io/trajectory_io.h"
 #include "frontend/vocabulary.h"
+#include "simulation/dataset_import.h"
 #include "simulation/scenario.h"
 
 namespace catgraph::fuzz {
@@ -126,6 +130,57 @@ inline void DatasetFolder(std::string_view input) {
   try {
     const Dataset d = ReadDataset(root);
     PosesAtFrames(d, d.odometry);
+  } catch (const FileError&) {
+  }
+  WriteFile(root / replaced.name, replaced.valid);
+}
+
+// A recording in one of `catgraph import`'s layouts. The first byte picks
+// the file the rest replaces in a valid three-frame recording (0: KITTI's
+// poses file, 1: its times.txt, 2: TUM's groundtruth.txt, 3: its rgb.txt,
+// 4: a folder's pose CSV, 5: its times file), and so the layout imported.
+inline void ImportRecording(std::string_view input) {
+  if (input.empty()) return;
+  struct File {
+    ImportLayout layout;
+    const char* name;
+    std::string_view valid;
+  };
+  constexpr File kFiles[] = {
+      {ImportLayout::kKitti, "kitti/poses.txt",
+       "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0.1\n1 0 0 0 0 1 0 0 0 0 1 0.2\n"},
+      {ImportLayout::kKitti, "kitti/times.txt", "0.0\n0.1\n0.2\n"},
+      {ImportLayout::kTum, "tum/groundtruth.txt", "0.0 0 0 0 0 0 0 1\n0.1 0 0 0.1 0 0 0 1\n0.2 0 0 0.2 0 0 0 1\n"},
+      {ImportLayout::kTum, "tum/rgb.txt", "0.0 rgb/0.png\n0.1 rgb/1.png\n0.2 rgb/2.png\n"},
+      {ImportLayout::kFolder, "folder/poses.csv", "timestamp,x,y,theta\n0,0,0,0\n0.1,0.1,0,0\n0.2,0.2,0,0.1\n"},
+      {ImportLayout::kFolder, "folder/times.txt", "0.0\n0.1\n0.2\n"}};
+  const std::filesystem::path root = ScratchDir() / "import";
+  if (!std::filesystem::exists(root / "folder" / "times.txt")) {
+    std::vector<std::uint8_t> png;
+    cv::imencode(".png", cv::Mat(4, 4, CV_8UC1, cv::Scalar(128)), png);
+    const std::string_view bytes(reinterpret_cast<const char*>(png.data()), png.size());
+    for (const char* dir : {"kitti/image_0", "tum/rgb", "folder/images"}) {
+      std::filesystem::create_directories(root / dir);
+      for (const char* image : {"0.png", "1.png", "2.png"}) WriteFile(root / dir / image, bytes);
+    }
+    for (const File& f : kFiles) WriteFile(root / f.name, f.valid);
+  }
+  const File& replaced = kFiles[static_cast<unsigned char>(input[0]) % 6];
+  WriteFile(root / replaced.name, input.substr(1));
+  ImportOptions options;
+  std::filesystem::path source = root / "tum";
+  if (replaced.layout == ImportLayout::kKitti) {
+    source = root / "kitti";
+    options.poses = source / "poses.txt";
+  } else if (replaced.layout == ImportLayout::kFolder) {
+    source = root / "folder" / "images";
+    options.poses = root / "folder" / "poses.csv";
+    options.times = root / "folder" / "times.txt";
+  }
+  std::filesystem::remove_all(root / "out");
+  try {
+    ImportDataset(replaced.layout, source, root / "out", options);
+    ReadDataset(root / "out");
   } catch (const FileError&) {
   }
   WriteFile(root / replaced.name, replaced.valid);

@@ -10,7 +10,7 @@
 # most FUZZ_CHUNK executions (default 100000). FUZZ_TIMEOUT: seconds of wall
 # time one input may take (default 10; libFuzzer measures wall time, so a
 # campaign at low priority on a busy machine needs more). TARGETs among graph trajectory scenario
-# dataset sweep vocabulary image (default all). The seed corpus is made from the
+# dataset import sweep vocabulary image (default all). The seed corpus is made from the
 # project's own test fixtures, scenarios, sweep configurations and files the
 # release build (build/apps/catgraph, when present) generates; each run grows
 # build-fuzz/corpus/TARGET. A crash, leak, hang (> 10 s), out-of-memory
@@ -27,7 +27,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
-all=(graph trajectory scenario dataset sweep vocabulary image)
+all=(graph trajectory scenario dataset import sweep vocabulary image)
 targets=("$@")
 [ "${#targets[@]}" -gt 0 ] || targets=("${all[@]}")
 build_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
@@ -70,6 +70,14 @@ for i in 0 1 2 3; do
          "$generated/dataset/groundtruth.csv" "$generated/dataset/meta.json")
   seed dataset "0$i" "${files[$i]}"
 done
+# The import target's files (its first byte picks which; fuzz_inputs.h).
+mkdir -p "$build_dir/corpus/import"
+printf '\x00%s' $'1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0.1\n1 0 0 0 0 1 0 0 0 0 1 0.2\n' > "$build_dir/corpus/import/seed-kitti-poses"
+printf '\x01%s' $'0.0\n0.1\n0.2\n' > "$build_dir/corpus/import/seed-kitti-times"
+printf '\x02%s' $'# ground truth\n0.0 0 0 0 0 0 0 1\n0.1 0 0 0.1 0 0 0 1\n0.2 0 0 0.2 0 0 0 1\n' > "$build_dir/corpus/import/seed-tum-truth"
+printf '\x03%s' $'0.0 rgb/0.png\n0.1 rgb/1.png\n0.2 rgb/2.png\n' > "$build_dir/corpus/import/seed-tum-rgb"
+seed import 04 "$generated/dataset/groundtruth.csv"
+printf '\x05%s' $'0.0\n0.1\n0.2\n' > "$build_dir/corpus/import/seed-folder-times"
 seed sweep 00 "$root"/docs/experiments/*.yaml
 seed sweep 02 "$root"/docs/experiments/*.csv
 seed vocabulary 00 "$generated/vocabulary.yml"

@@ -583,6 +583,47 @@ TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps
   std::filesystem::remove_all(dir);
 }
 
+// `import` as a user runs it: a simulated recording's images with a times
+// file and its ground truth as the pose CSV; the layout in any case.
+TEST_CASE("import reads an image folder with its times and poses, and names a layout it does not know",
+          "[apps][import]") {
+  const auto dir = testing::TempDir("cli_import");
+  const std::string data = (dir / "data").string();
+  REQUIRE(Run({"simulate", "--scenario", "office-static", "-o", data, "--frames", "30", "--quiet"}).status == 0);
+  const Dataset source = ReadDataset(data);
+  {
+    std::ofstream times(dir / "times.txt");
+    times.precision(17);
+    for (const auto& f : source.frames) times << f.timestamp_s << "\n";
+  }
+  const Result run = Run({"import", "Folder", (dir / "data" / "images").string(), "--times",
+                          (dir / "times.txt").string(), "--poses", (dir / "data" / "groundtruth.csv").string(),
+                          "-o", (dir / "imported").string(), "--quiet"});
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.out == "wrote " + (dir / "imported").string() +
+                       ": 30 frames in 1 traversal; odometry made from the poses (meta.json), ground truth "
+                       "from the poses\n");
+  const Dataset imported = ReadDataset(dir / "imported");
+  REQUIRE(imported.frames.size() == 30);
+  CHECK(imported.meta.synthetic_odometry);
+  for (std::size_t k = 0; k < 30; ++k) {
+    CHECK(imported.frames[k].timestamp_s == Approx(source.frames[k].timestamp_s).margin(1e-6));
+    const Pose2 a = InterpolatePose(imported.ground_truth, imported.frames[k].timestamp_s);
+    const Pose2 b = InterpolatePose(source.ground_truth, source.frames[k].timestamp_s);
+    CHECK((a.translation() - b.translation()).norm() < 1e-5);
+    CHECK(testing::ReadText(imported.ImagePath(k)) == testing::ReadText(source.ImagePath(k)));
+  }
+  const Result unknown = Run({"import", "rosbag2", data, "-o", (dir / "x").string()});
+  CHECK(unknown.status == 2);
+  CHECK_THAT(unknown.err, Catch::Contains("rosbag2") && Catch::Contains("folder"));
+  const Result no_poses = Run({"import", "folder", (dir / "data" / "images").string(), "-o", (dir / "y").string()});
+  CHECK(no_poses.status == 1);
+  CHECK_THAT(no_poses.err, Catch::Contains("needs an odometry CSV, a pose CSV or both"));
+  CHECK_FALSE(std::filesystem::exists(dir / "y"));
+  std::filesystem::remove_all(dir);
+}
+
 // Every command that writes refuses, before any work, to write over one of
 // its inputs or into a folder of the user's; the inputs stay byte for byte.
 TEST_CASE("no command writes over its input or into a folder catgraph did not write", "[apps][output]") {

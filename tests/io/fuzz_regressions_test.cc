@@ -19,7 +19,7 @@ namespace {
 TEST_CASE("inputs the fuzzers crashed on are read or refused with FileError", "[io][bad-input][fuzz]") {
   const std::map<std::string, std::function<void(std::string_view)>> targets = {
       {"graph", fuzz::Graph},         {"trajectory", fuzz::Trajectory}, {"scenario", fuzz::Scenario},
-      {"dataset", fuzz::DatasetFolder}, {"sweep", fuzz::Sweep},         {"vocabulary", fuzz::VocabularyFile},
+      {"dataset", fuzz::DatasetFolder}, {"import", fuzz::ImportRecording}, {"sweep", fuzz::Sweep},         {"vocabulary", fuzz::VocabularyFile},
       {"image", fuzz::Image}};
   const std::filesystem::path root = testing::Fixture("fuzz");
   int inputs = 0;
