@@ -34,6 +34,7 @@
 #include "backend/optimizer.h"
 #include "backend/pose_graph_optimizer.h"
 #include "frontend/localization.h"
+#include "simulation/dataset_import.h"
 #include "simulation/manhattan_world.h"
 #include "simulation/office_simulator.h"
 #include "simulation/outlier_injection.h"
@@ -586,6 +587,31 @@ void BindSimulation(py::module_& m) {
       py::arg("scenario"), py::arg("directory"), py::arg("max_frames") = 0, py::arg("seed") = py::none(),
       "Renders a scenario (a built-in name or a YAML file) into a dataset folder, as `catgraph simulate` without "
       "its staging; returns the number of frames.");
+  m.def(
+      "import_dataset",
+      [](const std::string& layout, const std::filesystem::path& source, const std::filesystem::path& directory,
+         const std::optional<std::filesystem::path>& times, const std::optional<std::filesystem::path>& odometry,
+         const std::optional<std::filesystem::path>& poses, double traversal_gap_s, std::uint64_t seed) {
+        const std::optional<ImportLayout> kind = ImportLayoutFromString(layout);
+        if (!kind) throw std::invalid_argument("layout: expected folder, kitti or tum, not '" + layout + "'");
+        ImportOptions options;
+        options.times = times.value_or(std::filesystem::path());
+        options.odometry = odometry.value_or(std::filesystem::path());
+        options.poses = poses.value_or(std::filesystem::path());
+        options.traversal_gap_s = traversal_gap_s;
+        options.seed = seed;
+        ImportSummary s;
+        {
+          py::gil_scoped_release release;
+          s = ImportDataset(*kind, source, directory, options);
+        }
+        return py::make_tuple(s.frames, s.left_out, s.traversals, s.synthetic_odometry);
+      },
+      py::arg("layout"), py::arg("source"), py::arg("directory"), py::arg("times") = py::none(),
+      py::arg("odometry") = py::none(), py::arg("poses") = py::none(), py::arg("traversal_gap_s") = 5.0,
+      py::arg("seed") = 1,
+      "Imports a recording (layout 'folder', 'kitti' or 'tum') into a dataset folder, as `catgraph import` "
+      "without its staging (docs/import.md); returns (frames, left_out, traversals, synthetic_odometry).");
 }
 
 void BindFrontEnd(py::module_& m) {

@@ -27,6 +27,25 @@ def test_a_simulated_dataset_reads_back(office):
     assert image.dtype == np.uint8 and image.shape == (101, 261, 3)
 
 
+def test_an_image_folder_imports_with_its_times_and_poses(office, tmp_path):
+    times = tmp_path / "times.txt"
+    times.write_text("".join(f"{f.timestamp_s:.9f}\n" for f in office.frames))
+    frames, left_out, traversals, synthetic = cg.import_dataset(
+        "folder", office.root / "images", tmp_path / "imported", times=times,
+        poses=office.root / "groundtruth.csv")
+    assert (frames, left_out, synthetic) == (375, 0, True)
+    t = np.array([f.timestamp_s for f in office.frames])
+    assert traversals == 1 + int(np.sum(np.diff(t) > 5.0))
+    imported = cg.read_dataset(tmp_path / "imported")
+    assert len(imported.frames) == 375
+    for column in (1, 2, 3):
+        a = np.interp(t, imported.ground_truth[:, 0], imported.ground_truth[:, column])
+        b = np.interp(t, office.ground_truth[:, 0], office.ground_truth[:, column])
+        assert np.max(np.abs(a - b)) < 1e-5
+    with pytest.raises(ValueError, match="folder, kitti or tum"):
+        cg.import_dataset("rosbag", office.root, tmp_path / "x")
+
+
 def test_localize_closes_loops_near_the_true_place(office):
     result = cg.localize(office)
     visual = [c for c in result.closures if c.kind == "visual"]
