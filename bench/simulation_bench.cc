@@ -26,7 +26,7 @@ const Fixture& SharedFixture() {
   return fixture;
 }
 
-// One thread; the target of issue #5 is >= 200 frames/s on one core.
+// One thread; the target is >= 200 frames/s on one core (BENCHMARKS.md).
 void BM_RenderFrame(benchmark::State& state) {
   const Fixture& f = SharedFixture();
   std::size_t i = 0;

@@ -823,7 +823,7 @@ PreparedScenario SimulateAndPrepare(const std::string& scenario, const std::file
   return {std::move(d), std::move(in)};
 }
 
-// Issue #6's office-static acceptance with the defaults (nothing changes
+// office-static's acceptance with the defaults (nothing changes
 // between the traversals), and #7's: the paper's claim, "identical in a
 // static environment". The robot held on the map through weak frames, and
 // only once it has closed (docs/frontend.md "Held after a closure"),
@@ -865,7 +865,7 @@ TEST_CASE("office-static: traversal 2 closes visually all but in full, none wron
   std::filesystem::remove_all(root);
 }
 
-// Issue #7's split-path scenario with the defaults: the second traversal
+// The split-path scenario with the defaults: the second traversal
 // leaves the route for a parallel corridor and comes back. At the detour's
 // corners, particles turned against corners of traversal 1 driven the other
 // way round match the turn's shape; the forward camera saw none of what
@@ -895,9 +895,9 @@ TEST_CASE("office-split: no wrong visual closure at the detour's corners and no 
 }
 
 // `catgraph demo` end to end (README's first command): it simulates
-// office-change and maps it. On its outputs, issues #6 and #7's acceptance
+// office-change and maps it. On its outputs, the front end's acceptance
 // with the defaults (the vocabulary trained on traversal 1, CAT-Graph+ over
-// both traversals), #8's outputs, then the SAD baseline on the same data.
+// both traversals), the mapping outputs, then the SAD baseline on the same data.
 TEST_CASE("demo on office-change: visual closures outside the changed region, inferred ones inside, none wrong, "
           "the corrected map",
           "[apps][localize][map][slow]") {
@@ -939,7 +939,7 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
     worst = std::max(worst, e);
     closed.at(c.at("frame").get<std::size_t>()) = true;
   }
-  // Issue #7's acceptance: the changed region covered by inferences, mean
+  // CAT-Graph+'s acceptance: the changed region covered by inferences, mean
   // error <= 0.3 m, none beyond 0.5 m (the paper: 0.24 m, all < 0.4 m).
   REQUIRE(inferred > 0);
   CHECK(sum_inferred / inferred <= 0.3);
@@ -962,7 +962,7 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   CHECK(std::filesystem::exists(out / "localization.png"));
   CHECK(std::filesystem::exists(out / "discarded_inferences.json"));
 
-  // Issue #8: the corrected map and its report.
+  // The corrected map and its report.
   std::ifstream report_in(out / "report.json");
   const auto report = nlohmann::json::parse(report_in);
   for (const char* key : {"frames", "method", "hierarchy", "solves", "accepted", "rejected", "closures_by_kind",
@@ -1046,7 +1046,7 @@ TEST_CASE("demo on office-change: visual closures outside the changed region, in
   CHECK(cell[8] == "0");
   CHECK(std::stoi(cell[9]) == report.at("feedback").at("reruns").get<int>());
 
-  // Issue #8: false visual matches at the source. The flagged closures and
+  // False visual matches at the source. The flagged closures and
   // their children in report.json ...
   const auto injected_dir = root / "injected";
   const Result map = Run({"map", data.string(), "-o", injected_dir.string(), "--inject-false-visual", "3", "--seed",

@@ -1,6 +1,6 @@
 // Files that declare absurd sizes get a clear error, not an out-of-memory
 // kill: an image header claiming 100 000 x 100 000 pixels, a 100 MB line, a
-// pose id of 2^41, an oversized configuration. Issue #9; docs/fuzzing.md.
+// pose id of 2^41, an oversized configuration. docs/fuzzing.md.
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
