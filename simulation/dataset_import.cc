@@ -179,6 +179,7 @@ std::vector<SourceFrame> ReadTumFrames(const std::filesystem::path& root) {
     const std::filesystem::path image = root / std::string(line.token(1));
     std::error_code ec;  // a name too long for the file system is no image either
     if (!std::filesystem::is_regular_file(image, ec)) line.Fail("no image '" + image.string() + "'");
+    if (!IsImage(image)) line.Fail("'" + image.string() + "' is not a .png, .jpg, .pgm, .ppm or .bmp image");
     frames.push_back({Timestamp(line, 0), image});
     if (frames.size() > kMaxFrames) line.Fail("more than a million frames");
   });
