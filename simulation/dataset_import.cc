@@ -93,26 +93,11 @@ void RequireIncreasing(const std::vector<double>& times, const std::filesystem::
   }
 }
 
-// `timestamp,x,y,theta` with that header (the dataset's own odometry.csv).
+// `timestamp,x,y,theta` with that header (the dataset's own odometry.csv),
+// comment lines allowed; timestamps not negative, as every input's.
 std::vector<TimedPose2> ReadPose2Csv(const std::filesystem::path& path) {
-  std::vector<TimedPose2> poses;
-  bool header = true;
-  ForEachLine(path, "a pose CSV (timestamp,x,y,theta)", SplitCsv, [&](const Line& line) {
-    if (header) {
-      header = false;
-      if (line.size() != 4 || line.token(0) != "timestamp" || line.token(1) != "x" || line.token(2) != "y" ||
-          line.token(3) != "theta") {
-        line.Fail("expected the header 'timestamp,x,y,theta'");
-      }
-      return;
-    }
-    if (line.size() != 4) line.Fail("expected 4 fields (timestamp,x,y,theta), found " + std::to_string(line.size()));
-    poses.push_back({Timestamp(line, 0), Pose2(line.Number(1, "x"), line.Number(2, "y"),
-                                               WrapAngle(line.Number(3, "theta")))});
-  });
-  std::vector<double> times;
-  for (const auto& p : poses) times.push_back(p.timestamp_s);
-  RequireIncreasing(times, path);
+  std::vector<TimedPose2> poses = ReadPoseTable(path, /*comments=*/true);
+  if (poses.front().timestamp_s < 0.0) throw FileError(path.string(), 0, "the first timestamp is negative");
   return poses;
 }
 
@@ -321,7 +306,6 @@ ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& so
   ValidateOptions(options);
   std::vector<SourceFrame> frames;
   std::vector<TimedPose2> odometry, truth;
-  std::filesystem::path odometry_file, truth_file;  // where each came from, for errors
   std::string what;
   switch (layout) {
     case ImportLayout::kFolder:
@@ -329,8 +313,8 @@ ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& so
         throw std::invalid_argument("the folder layout needs an odometry CSV, a pose CSV or both");
       }
       frames = FolderFrames(source, options.times);
-      if (!options.odometry.empty()) odometry = ReadPose2Csv(odometry_file = options.odometry);
-      if (!options.poses.empty()) truth = ReadPose2Csv(truth_file = options.poses);
+      if (!options.odometry.empty()) odometry = ReadPose2Csv(options.odometry);
+      if (!options.poses.empty()) truth = ReadPose2Csv(options.poses);
       what = "an image folder";
       break;
     case ImportLayout::kKitti: {
@@ -348,20 +332,16 @@ ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& so
                                                                " images in " + images.string());
       }
       for (std::size_t i = 0; i < files.size(); ++i) frames.push_back({times[i], files[i]});
-      truth_file = options.poses;
       truth = OntoGroundPlane(ReadKittiPoses(options.poses, times), options.poses);
       what = "the KITTI odometry layout";
       break;
     }
     case ImportLayout::kTum: {
       frames = ReadTumFrames(source);
-      truth_file = source / "groundtruth.txt";
+      const std::filesystem::path truth_file = source / "groundtruth.txt", odometry_file = source / "odometry.txt";
       truth = OntoGroundPlane(ReadTumPoses(truth_file), truth_file);
       std::error_code ec;
-      if (std::filesystem::exists(source / "odometry.txt", ec)) {
-        odometry_file = source / "odometry.txt";
-        odometry = OntoGroundPlane(ReadTumPoses(odometry_file), odometry_file);
-      }
+      if (std::filesystem::exists(odometry_file, ec)) odometry = OntoGroundPlane(ReadTumPoses(odometry_file), odometry_file);
       what = "the TUM RGB-D layout";
       break;
     }
@@ -370,11 +350,9 @@ ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& so
   summary.ground_truth = !truth.empty();
   if (odometry.empty()) {
     odometry = WheelOdometryAlong(truth, options.track_m, options.odometry_noise, options.seed);
-    odometry_file = truth_file;
     summary.synthetic_odometry = true;
   }
-  if (odometry.size() < 2) throw FileError(odometry_file.string(), 0, "fewer than two poses; expected a path");
-  if (!truth.empty() && truth.size() < 2) throw FileError(truth_file.string(), 0, "fewer than two poses; expected a path");
+  // Every reader above returns at least two poses.
 
   // Frames inside the odometry's and the poses' time ranges.
   auto inside = [](const std::vector<TimedPose2>& poses, double t) {

@@ -99,6 +99,12 @@ struct Dataset {
 // Reads and checks a dataset folder. Throws FileError.
 Dataset ReadDataset(const std::filesystem::path& root);
 
+// A `timestamp,x,y,theta` table (odometry.csv, groundtruth.csv): the header,
+// then at least two rows with strictly increasing timestamps. With
+// `comments`, lines starting with '#' are skipped (files of other tools;
+// the dataset's own tables have none). Throws FileError naming the line.
+std::vector<TimedPose2> ReadPoseTable(const std::filesystem::path& path, bool comments = false);
+
 // Writes frames.csv, odometry.csv, groundtruth.csv (when not empty) and
 // meta.json of `dataset` into dataset.root, each atomically. Images are the
 // caller's. Throws std::invalid_argument when the tables are inconsistent

@@ -25,10 +25,11 @@ constexpr std::size_t kMaxCsvLineBytes = 4096;
 constexpr std::uintmax_t kMaxMetaBytes = 256u << 20;  // meta.json holds per-frame flags
 
 // Calls `row` for every data line of a CSV file whose header starts with
-// `columns`; extra columns named in `optional` may follow.
+// `columns`; extra columns named in `optional` may follow. With `comments`,
+// lines starting with '#' are skipped as blank ones are.
 template <typename RowFn>
 void ReadCsv(const std::filesystem::path& path, const std::vector<std::string>& columns,
-             const std::vector<std::string>& optional, RowFn row) {
+             const std::vector<std::string>& optional, bool comments, RowFn row) {
   std::string expected_header;
   for (const auto& c : columns) expected_header += (expected_header.empty() ? "" : ",") + c;
   for (const auto& c : optional) expected_header += "[," + c + "]";
@@ -41,7 +42,8 @@ void ReadCsv(const std::filesystem::path& path, const std::vector<std::string>& 
   while (ReadBoundedLine(in, text, kMaxCsvLineBytes, name, number, "a CSV row")) {
     ++number;
     if (!text.empty() && text.back() == '\r') text.pop_back();
-    if (text.find_first_not_of(kWhitespace) == std::string::npos) continue;
+    const std::size_t first = text.find_first_not_of(kWhitespace);
+    if (first == std::string::npos || (comments && text[first] == '#')) continue;
     const std::vector<std::string_view> fields = SplitCsv(text);
     if (header) {
       header = false;
@@ -75,9 +77,11 @@ void ReadCsv(const std::filesystem::path& path, const std::vector<std::string>& 
   if (header) throw FileError(name, 0, "is empty; expected a header line and rows");
 }
 
-std::vector<TimedPose2> ReadPoses(const std::filesystem::path& path) {
+}  // namespace
+
+std::vector<TimedPose2> ReadPoseTable(const std::filesystem::path& path, bool comments) {
   std::vector<TimedPose2> poses;
-  ReadCsv(path, {"timestamp", "x", "y", "theta"}, {}, [&](const Line& line) {
+  ReadCsv(path, {"timestamp", "x", "y", "theta"}, {}, comments, [&](const Line& line) {
     TimedPose2 p;
     p.timestamp_s = line.Number(0, "timestamp");
     p.pose = Pose2(line.Number(1, "x"), line.Number(2, "y"), line.Number(3, "theta"));
@@ -93,6 +97,8 @@ std::vector<TimedPose2> ReadPoses(const std::filesystem::path& path) {
   }
   return poses;
 }
+
+namespace {
 
 // Whether `path`, every symbolic link followed, lies inside `root` (itself
 // canonical): a dataset reads nothing outside its folder.
@@ -112,7 +118,7 @@ std::vector<DatasetFrame> ReadFrames(const std::filesystem::path& root) {
   std::error_code canonical_error;
   const std::filesystem::path canonical_root = std::filesystem::canonical(root, canonical_error);
   std::vector<DatasetFrame> frames;
-  ReadCsv(path, {"timestamp", "image", "traversal", "changed"}, {"changed_fraction"},
+  ReadCsv(path, {"timestamp", "image", "traversal", "changed"}, {"changed_fraction"}, /*comments=*/false,
           [&](const Line& line) {
             DatasetFrame f;
             f.timestamp_s = line.Number(0, "timestamp");
@@ -335,9 +341,9 @@ Dataset ReadDataset(const std::filesystem::path& root) {
   d.root = root;
   d.meta = ReadMeta(root / "meta.json");
   d.frames = ReadFrames(root);
-  d.odometry = ReadPoses(root / "odometry.csv");
+  d.odometry = ReadPoseTable(root / "odometry.csv");
   if (std::filesystem::exists(root / "groundtruth.csv", ec)) {
-    d.ground_truth = ReadPoses(root / "groundtruth.csv");
+    d.ground_truth = ReadPoseTable(root / "groundtruth.csv");
   }
   CheckConsistency(d, [&](const std::string& file, int line, const std::string& message) {
     throw FileError((root / file).string(), line, message);
