@@ -5,8 +5,6 @@
 #include <cmath>
 #include <charconv>
 #include <cstdio>
-#include <numbers>
-#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,7 +12,6 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "backend/graph/angle.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
@@ -245,10 +242,7 @@ void ValidateOptions(const ImportOptions& o) {
     throw std::invalid_argument("traversal_gap_s: expected a finite number of seconds > 0");
   }
   if (!(o.track_m > 0.0 && std::isfinite(o.track_m))) throw std::invalid_argument("track_m: expected > 0");
-  if (!(o.odometry_noise.noise_m_per_sqrt_m >= 0.0) || !(std::abs(o.odometry_noise.left_scale_error) < 0.5) ||
-      !(std::abs(o.odometry_noise.right_scale_error) < 0.5) || !(std::abs(o.odometry_noise.track_error) < 0.5)) {
-    throw std::invalid_argument("odometry noise: expected noise >= 0 and scale and track errors below 0.5");
-  }
+  Validate(o.odometry_noise);
 }
 
 }  // namespace
@@ -267,38 +261,6 @@ std::optional<ImportLayout> ImportLayoutFromString(std::string_view text) {
     if (text == ToString(l)) return l;
   }
   return std::nullopt;
-}
-
-std::vector<TimedPose2> WheelOdometryAlong(const std::vector<TimedPose2>& path, double track_m,
-                                           const OdometryOptions& noise, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::vector<TimedPose2> out;
-  if (path.empty()) return out;
-  Pose2 pose;
-  out.push_back({path.front().timestamp_s, pose});
-  for (std::size_t i = 1; i < path.size(); ++i) {
-    const Pose2 d = path[i - 1].pose.Between(path[i].pose);
-    const double chord = std::hypot(d.x(), d.y());
-    // The chord's direction in the robot's frame (half the turn for a wheeled
-    // robot's arc); travel is backwards when it points behind the arc's mean
-    // heading, and its length is then negative.
-    const double direction = chord > 0.0 ? std::atan2(d.y(), d.x()) : 0.5 * d.theta();
-    const bool backwards = std::abs(WrapAngle(direction - 0.5 * d.theta())) > 0.5 * std::numbers::pi;
-    const double travel_direction = backwards ? direction - std::numbers::pi : direction;
-    const double ds = backwards ? -chord : chord;
-    const double left = ds - 0.5 * d.theta() * track_m, right = ds + 0.5 * d.theta() * track_m;
-    const double l = left * (1.0 + noise.left_scale_error) +
-                     noise.noise_m_per_sqrt_m * std::sqrt(std::abs(left)) * normal(rng);
-    const double r = right * (1.0 + noise.right_scale_error) +
-                     noise.noise_m_per_sqrt_m * std::sqrt(std::abs(right)) * normal(rng);
-    const double measured_ds = 0.5 * (l + r), measured_dtheta = (r - l) / (track_m * (1.0 + noise.track_error));
-    // Along the direction of travel, turned by half the turn's error.
-    const double heading = travel_direction + 0.5 * (measured_dtheta - d.theta());
-    pose = pose * Pose2(measured_ds * std::cos(heading), measured_ds * std::sin(heading), measured_dtheta);
-    out.push_back({path[i].timestamp_s, pose});
-  }
-  return out;
 }
 
 ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& source,

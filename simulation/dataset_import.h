@@ -73,13 +73,6 @@ struct ImportSummary {
 ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& source,
                             const std::filesystem::path& output, const ImportOptions& options);
 
-// The simulator's wheel-odometry model along a true path: each step's travel
-// split onto two wheels `track_m` apart, measured with the scale, track and
-// noise errors of `noise` (robot.h), and integrated from the origin. One
-// odometry pose per path pose; deterministic for a seed.
-std::vector<TimedPose2> WheelOdometryAlong(const std::vector<TimedPose2>& path, double track_m,
-                                           const OdometryOptions& noise, std::uint64_t seed);
-
 }  // namespace catgraph
 
 #endif  // CATGRAPH_SIMULATION_DATASET_IMPORT_H_

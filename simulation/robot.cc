@@ -3,9 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
+
+#include "backend/graph/angle.h"
 
 namespace catgraph {
 namespace {
@@ -60,6 +64,18 @@ Pose2 Arc(double v, double omega, double dt) {
   return {v / omega * std::sin(a), v / omega * (1.0 - std::cos(a)), a};
 }
 
+// The robot's travel and turn since the last odometry message as its
+// encoders measure the wheels' true travel `left` and `right`: each wheel's
+// scale error and noise (two normal draws, the left wheel's first), and the
+// track error.
+std::pair<double, double> MeasuredTravel(double left, double right, double track_m, const OdometryOptions& odo,
+                                         std::mt19937_64& rng, std::normal_distribution<double>& normal) {
+  const double l = left * (1.0 + odo.left_scale_error) + odo.noise_m_per_sqrt_m * std::sqrt(std::abs(left)) * normal(rng);
+  const double r =
+      right * (1.0 + odo.right_scale_error) + odo.noise_m_per_sqrt_m * std::sqrt(std::abs(right)) * normal(rng);
+  return {0.5 * (l + r), (r - l) / (track_m * (1.0 + odo.track_error))};
+}
+
 void Validate(const std::vector<TraversalPlan>& traversals, const RobotOptions& robot,
               const OdometryOptions& odometry) {
   if (traversals.empty()) throw std::invalid_argument("expected at least one traversal");
@@ -68,12 +84,7 @@ void Validate(const std::vector<TraversalPlan>& traversals, const RobotOptions& 
     throw std::invalid_argument("robot: expected track_m, lookahead_m, max_turn_rate_rad_s and "
                                 "min_speed_m_s > 0");
   }
-  if (!(odometry.rate_hz > 0.0 && odometry.rate_hz <= 1000.0) || !(odometry.noise_m_per_sqrt_m >= 0.0) ||
-      !(std::abs(odometry.left_scale_error) < 0.5) || !(std::abs(odometry.right_scale_error) < 0.5) ||
-      !(std::abs(odometry.track_error) < 0.5)) {
-    throw std::invalid_argument("odometry: expected rate_hz in (0, 1000], noise_m_per_sqrt_m >= 0 "
-                                "and scale and track errors below 0.5 in magnitude");
-  }
+  catgraph::Validate(odometry);
   for (const auto& t : traversals) {
     if (t.id < 1) throw std::invalid_argument("traversal ids start at 1; found " + std::to_string(t.id));
     if (!(t.speed_m_s >= robot.min_speed_m_s && t.speed_m_s <= 3.0)) {
@@ -84,6 +95,15 @@ void Validate(const std::vector<TraversalPlan>& traversals, const RobotOptions& 
 }
 
 }  // namespace
+
+void Validate(const OdometryOptions& odometry) {
+  if (!(odometry.rate_hz > 0.0 && odometry.rate_hz <= 1000.0) || !(odometry.noise_m_per_sqrt_m >= 0.0) ||
+      !(std::abs(odometry.left_scale_error) < 0.5) || !(std::abs(odometry.right_scale_error) < 0.5) ||
+      !(std::abs(odometry.track_error) < 0.5)) {
+    throw std::invalid_argument("odometry: expected rate_hz in (0, 1000], noise_m_per_sqrt_m >= 0 "
+                                "and scale and track errors below 0.5 in magnitude");
+  }
+}
 
 std::vector<Eigen::Vector2d> OffsetRoute(const std::vector<Eigen::Vector2d>& route, double offset_m) {
   std::vector<Eigen::Vector2d> p;
@@ -148,11 +168,7 @@ RobotRun DriveRoutes(const std::vector<TraversalPlan>& traversals, const RobotOp
   // One odometry message: the wheel travel since the last one, as measured,
   // integrated at the midpoint heading.
   auto tick = [&] {
-    const double l = left * (1.0 + odo.left_scale_error) +
-                     odo.noise_m_per_sqrt_m * std::sqrt(std::abs(left)) * normal(rng);
-    const double r = right * (1.0 + odo.right_scale_error) +
-                     odo.noise_m_per_sqrt_m * std::sqrt(std::abs(right)) * normal(rng);
-    const double ds = 0.5 * (l + r), dtheta = (r - l) / (robot.track_m * (1.0 + odo.track_error));
+    const auto [ds, dtheta] = MeasuredTravel(left, right, robot.track_m, odo, rng, normal);
     odometry_pose =
         odometry_pose * Pose2(ds * std::cos(0.5 * dtheta), ds * std::sin(0.5 * dtheta), dtheta);
     run.odometry.push_back({t, odometry_pose});
@@ -201,6 +217,34 @@ RobotRun DriveRoutes(const std::vector<TraversalPlan>& traversals, const RobotOp
     if (step % substeps == 0) tick();
   }
   return run;
+}
+
+std::vector<TimedPose2> WheelOdometryAlong(const std::vector<TimedPose2>& path, double track_m,
+                                           const OdometryOptions& noise, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<TimedPose2> out;
+  if (path.empty()) return out;
+  Pose2 pose;
+  out.push_back({path.front().timestamp_s, pose});
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Pose2 d = path[i - 1].pose.Between(path[i].pose);
+    const double chord = std::hypot(d.x(), d.y());
+    // The chord's direction in the robot's frame (half the turn for a wheeled
+    // robot's arc); travel is backwards when it points behind the arc's mean
+    // heading, and its length is then negative.
+    const double direction = chord > 0.0 ? std::atan2(d.y(), d.x()) : 0.5 * d.theta();
+    const bool backwards = std::abs(WrapAngle(direction - 0.5 * d.theta())) > 0.5 * std::numbers::pi;
+    const double travel_direction = backwards ? direction - std::numbers::pi : direction;
+    const double ds = backwards ? -chord : chord;
+    const double left = ds - 0.5 * d.theta() * track_m, right = ds + 0.5 * d.theta() * track_m;
+    const auto [measured_ds, measured_dtheta] = MeasuredTravel(left, right, track_m, noise, rng, normal);
+    // Along the direction of travel, turned by half the turn's error.
+    const double heading = travel_direction + 0.5 * (measured_dtheta - d.theta());
+    pose = pose * Pose2(measured_ds * std::cos(heading), measured_ds * std::sin(heading), measured_dtheta);
+    out.push_back({path[i].timestamp_s, pose});
+  }
+  return out;
 }
 
 }  // namespace catgraph

@@ -68,6 +68,17 @@ std::vector<Eigen::Vector2d> OffsetRoute(const std::vector<Eigen::Vector2d>& rou
 // the run.
 std::vector<TimedPose2> TruthAt(const RobotRun& run, std::vector<double> times);
 
+// Throws std::invalid_argument unless rate_hz is in (0, 1000], the noise is
+// >= 0 and the scale and track errors are below 0.5 in magnitude.
+void Validate(const OdometryOptions& odometry);
+
+// The wheel-odometry model of DriveRoutes along a given true path: each step's travel
+// split onto two wheels `track_m` apart, measured with the scale, track and
+// noise errors of `noise`, and integrated from the origin. One
+// odometry pose per path pose; deterministic for a seed.
+std::vector<TimedPose2> WheelOdometryAlong(const std::vector<TimedPose2>& path, double track_m,
+                                           const OdometryOptions& noise, std::uint64_t seed);
+
 // Drives the traversals one after the other, starting at the first
 // waypoint facing the second. Throws std::invalid_argument on bad options
 // and std::runtime_error when the controller cannot reach a route's end.
