@@ -15,8 +15,8 @@
 // x right, y down); they are brought onto the ground plane, the plane normal
 // to the camera's mean y axis, with the first frame at the origin facing +x.
 // Where a recording has poses but no odometry, the odometry is made from the
-// poses by the simulator's wheel-odometry model (robot.h's OdometryOptions,
-// seeded) and meta.json says so (synthetic_odometry). Frames outside the
+// poses by the simulator's wheel-odometry model (robot.h's
+// WheelOdometryAlong, seeded) and meta.json says so (synthetic_odometry). Frames outside the
 // time range of the odometry or the poses are left out and counted. A gap
 // in the frames' timestamps longer than `traversal_gap_s` starts a new
 // traversal. Images are copied as they are (PNG, JPEG, PNM, BMP).
