@@ -141,9 +141,12 @@ TEST_CASE("simulate and map killed at random points leave the earlier output who
   REQUIRE(RunProcess(simulate("100")) == 0);
   const std::string old_frames = Slurp(std::filesystem::path(data) / "frames.csv");
   int killed = 0;
+  // The killed runs are asked for 3000 frames, which take several seconds on
+  // one thread, so that a kill at up to 1.5 s always comes before the end
+  // (400 frames were done in 1.4 s on a quiet machine).
   for (const double t : KillTimes(4, 0.05, 1.5, 11)) {
     CAPTURE(t);
-    killed += RunProcess(simulate("400"), After(t)) == -1;
+    killed += RunProcess(simulate("3000"), After(t)) == -1;
     CheckNoTornFile(data);
     CHECK(Slurp(std::filesystem::path(data) / "frames.csv") == old_frames);  // the old dataset, whole
     CHECK(ReadDataset(data).frames.size() == 100);
