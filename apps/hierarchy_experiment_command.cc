@@ -19,11 +19,19 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
-#include "apps/map_outcome.h"
+#include "mapping/map_dataset.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 
 namespace catgraph {
+
+using mapping::HierarchyOptionsFor;
+using mapping::InjectionOutcome;
+using mapping::MapOutcome;
+using mapping::MappingResult;
+using mapping::SolveWithFeedback;
+using mapping::TruthAtFrames;
+using mapping::kDefaultFeedbackReruns;
 namespace {
 
 struct ExperimentOptions {
@@ -154,14 +162,14 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
       row.seed = seed;
       row.hierarchy = o.hierarchies[p];
       row.ate_without_m =
-          AteOf(MapWithFeedback(d, words, model, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
-      const FedBackMap m = MapWithFeedback(d, words, model, with, optimizer, policies[p], truth, o.feedback_reruns);
+          AteOf(SolveWithFeedback(d, words, model, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
+      const MappingResult m = SolveWithFeedback(d, words, model, with, optimizer, policies[p], truth, o.feedback_reruns);
       row.ate_with_m = AteOf(m.outcome);
       row.injection = m.first.injection;
       row.solves = m.first.solved.solves;
       row.reruns = m.reruns;
       row.ate_oracle_m =
-          AteOf(MapWithFeedback(d, words, model, oracle, optimizer, policies[p], truth, o.feedback_reruns).outcome);
+          AteOf(SolveWithFeedback(d, words, model, oracle, optimizer, policies[p], truth, o.feedback_reruns).outcome);
       const InjectionOutcome& i = row.injection;
       out << "seed " << seed << ", " << row.hierarchy << ": " << i.parents_rejected << " of " << i.parents
           << " false closures rejected, " << i.children_of_rejected_accepted << " of "

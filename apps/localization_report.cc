@@ -25,25 +25,12 @@ namespace catgraph {
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out) {
   if (o.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
   if (!o.vocabulary.empty()) return Vocabulary::Load(o.vocabulary);
-  const int first = d.Traversals().front();
-  std::vector<std::size_t> frames;
-  for (std::size_t i = 0; i < d.frames.size(); ++i) {
-    if (d.frames[i].traversal == first) frames.push_back(i);
-  }
-  // Automatic: about 200 images, every frame of a short traversal.
-  const std::size_t every = o.train_every > 0 ? static_cast<std::size_t>(o.train_every)
-                                              : std::max<std::size_t>(1, frames.size() / 200);
-  std::vector<cv::Mat> images;
-  for (std::size_t k = 0; k < frames.size(); k += every) {
-    const std::size_t i = frames[k];
-    images.push_back(ReadImage(d.ImagePath(i)));
-  }
   VocabularyOptions options;
   options.words = o.words;
-  Vocabulary v = TrainVocabulary(images, options);
-  out << "trained a " << v.size() << "-word SIFT vocabulary on " << images.size()
-      << " frames of traversal " << first << "\n";
-  return v;
+  MapVocabulary v = TrainMapVocabulary(d, options, o.train_every);
+  out << "trained a " << v.vocabulary.size() << "-word SIFT vocabulary on " << v.frames << " frames of traversal "
+      << v.traversal << "\n";
+  return std::move(v.vocabulary);
 }
 
 FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {

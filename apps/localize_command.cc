@@ -7,7 +7,7 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
-#include "apps/map_outcome.h"
+#include "mapping/map_dataset.h"
 #include "apps/progress_bar.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
@@ -15,6 +15,12 @@
 #include "frontend/localization.h"
 
 namespace catgraph {
+
+using mapping::HierarchyOptionsFor;
+using mapping::MappingResult;
+using mapping::SolveWithFeedback;
+using mapping::TruthAtFrames;
+using mapping::kDefaultFeedbackReruns;
 namespace {
 
 void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
@@ -78,9 +84,9 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
       options.filter.total_validation_m = t;
       options.filter.local_validation_m = l;
       LocalizationResult r = Localize(d, words, model, options);
-      std::optional<FedBackMap> mapped;
+      std::optional<MappingResult> mapped;
       if (o.back_end) {
-        mapped = MapWithFeedback(d, words, model, std::move(r), optimizer, hierarchy, truth, kDefaultFeedbackReruns);
+        mapped = SolveWithFeedback(d, words, model, std::move(r), optimizer, hierarchy, truth, kDefaultFeedbackReruns);
         r = std::move(mapped->front);
       }
       int inferred = 0, wrong = 0;

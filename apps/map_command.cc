@@ -17,7 +17,7 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
-#include "apps/map_outcome.h"
+#include "mapping/map_dataset.h"
 #include "apps/plot/graph_figure.h"
 #include "backend/evaluation.h"
 #include "backend/graph/trajectory.h"
@@ -29,6 +29,15 @@
 #include "hierarchy/closure_hierarchy.h"
 
 namespace catgraph {
+
+using mapping::HierarchyOptionsFor;
+using mapping::InjectionOutcome;
+using mapping::KindCounts;
+using mapping::MapOutcome;
+using mapping::MappingResult;
+using mapping::SolveWithFeedback;
+using mapping::TruthAtFrames;
+using mapping::kDefaultFeedbackReruns;
 namespace {
 
 struct MapCommandOptions {
@@ -123,7 +132,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on "
       << first.graph.vertices.size() << " poses and " << first.closures.size() << " closures\n";
   const Trajectory2 truth = TruthAtFrames(d);
-  const FedBackMap fed = MapWithFeedback(d, inputs.observations, *inputs.model, std::move(first), optimizer,
+  const MappingResult fed = SolveWithFeedback(d, inputs.observations, *inputs.model, std::move(first), optimizer,
                                          hierarchy_options, truth, o.feedback_reruns);
   const LocalizationResult& r = fed.front;
   const MapOutcome& m = fed.outcome;

@@ -61,6 +61,21 @@ std::vector<Observation> ExtractObservations(const Dataset& d, const Vocabulary*
   return observations;
 }
 
+MapVocabulary TrainMapVocabulary(const Dataset& d, const VocabularyOptions& options, int every) {
+  if (every < 0) throw std::invalid_argument("TrainMapVocabulary: every must be >= 0, not " + std::to_string(every));
+  const int first = d.Traversals().front();
+  std::vector<std::size_t> frames;
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    if (d.frames[i].traversal == first) frames.push_back(i);
+  }
+  // Automatic: about 200 images, every frame of a short traversal.
+  const std::size_t step = every > 0 ? static_cast<std::size_t>(every) : std::max<std::size_t>(1, frames.size() / 200);
+  std::vector<cv::Mat> images;
+  for (std::size_t k = 0; k < frames.size(); k += step) images.push_back(ReadImage(d.ImagePath(frames[k])));
+  MapVocabulary out{TrainVocabulary(images, options), static_cast<int>(images.size()), first};
+  return out;
+}
+
 HolisticFrontEnd PrepareHolistic(const Dataset& d, const HolisticOptions& holistic,
                                  const LocalizationOptions& options) {
   HolisticFrontEnd out;
@@ -91,20 +106,144 @@ LocalizationResult Localize(const Dataset& d, const Vocabulary& vocabulary,
   return Localize(d, ExtractObservations(d, &vocabulary, nullptr, options), model, options);
 }
 
-LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& observations,
-                            const ObservationModel& model, const LocalizationOptions& options) {
-  const PoseGraphUncertainty& uncertainty = options.graph_uncertainty;
-  if (!(uncertainty.odometry_m_per_sqrt_m > 0.0 && uncertainty.odometry_rad_per_sqrt_m > 0.0 &&
-        uncertainty.min_distance_m > 0.0 && (uncertainty.closure_sigma.array() > 0.0).all())) {
+namespace {
+
+Eigen::Matrix3d InformationOf(const Eigen::Vector3d& sigma) {
+  return sigma.cwiseProduct(sigma).cwiseInverse().asDiagonal();
+}
+
+const LocalizationOptions& Validated(const LocalizationOptions& options) {
+  const PoseGraphUncertainty& u = options.graph_uncertainty;
+  if (!(u.odometry_m_per_sqrt_m > 0.0 && u.odometry_rad_per_sqrt_m > 0.0 && u.min_distance_m > 0.0 &&
+        (u.closure_sigma.array() > 0.0).all())) {
     throw std::invalid_argument("Localize: every PoseGraphUncertainty field must be > 0");
   }
+  return options;
+}
+
+}  // namespace
+
+Localizer::Localizer(const ObservationModel& model, LocalizationOptions options)
+    : filter_(model, Validated(options).filter),
+      closure_information_(InformationOf(options.graph_uncertainty.closure_sigma)) {
+  result_.options = std::move(options);
+  result_.observation.model = model.Name();
+  result_.observation.new_place_log_offset =
+      result_.options.filter.new_place_log_offset.value_or(model.NewPlaceLogOffset());
+  if (const auto* holistic = dynamic_cast<const HolisticModel*>(&model)) {
+    result_.observation.holistic = holistic->options();
+    result_.observation.calibration = holistic->calibration();
+  }
+}
+
+double Localizer::LocationError(std::size_t frame, const LocationHypothesis& h) const {
+  if (h.edge < 0 || !truth_[frame]) return kNoError;
+  const GraphEdge& e = filter_.graph().edge(h.edge);
+  const std::optional<Pose2>& a = truth_[static_cast<std::size_t>(FrameOf(e.from))];
+  const std::optional<Pose2>& b = truth_[static_cast<std::size_t>(FrameOf(e.to))];
+  if (!a || !b) return kNoError;
+  return (truth_[frame]->translation() - InterpolateTranslation(*a, *b, h.alpha)).norm();
+}
+
+void Localizer::AddClosure(const LoopClosure& c, double information_scale) {
+  result_.closures.push_back(c);
+  Provenance provenance;
+  for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
+  result_.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
+                                       {c.T_frame_matched, information_scale * closure_information_}, c.kind,
+                                       provenance, {}, {}, {}});
+}
+
+// The id of the visual closure a step's inferences hung from (-1: none).
+int Localizer::ReferenceClosure(const CatGraphStep& step) const {
+  const auto found = visual_closure_of_frame_.find(step.reference_node >= 0 ? FrameOf(step.reference_node) : -1);
+  return found == visual_closure_of_frame_.end() ? -1 : found->second;
+}
+
+void Localizer::Discard(const InferredClosure& inferred, int reference, int validating, DiscardReason reason) {
+  const int at = FrameOf(inferred.node);
+  result_.discarded_inferences.push_back({at, FrameOf(inferred.matched_node), reference, validating,
+                                          LocationError(static_cast<std::size_t>(at), inferred.location), reason});
+}
+
+const FrameLocalization& Localizer::AddFrame(const FrameInput& in, const Observation& z, const Aliasing& imposed) {
+  const PoseGraphUncertainty& uncertainty = result_.options.graph_uncertainty;
+  const std::size_t k = result_.frames.size();
+  Aliasing aliasing = imposed;
+  aliasing.vetoed = aliasing.vetoed || result_.options.vetoed_frames.count(static_cast<int>(k)) > 0;
+  truth_.push_back(in.truth);
+  const Pose2 u = last_odometry_ ? last_odometry_->Between(in.odometry) : Pose2();
+  last_odometry_ = in.odometry;
+  const CatGraphStep step = filter_.Step(static_cast<int>(k), in.time_s, u, z, aliasing);
+  FrameLocalization f;
+  f.frame = static_cast<int>(k);
+  f.traversal = in.traversal;
+  f.best = step.best;
+  f.new_place_probability = step.new_place_probability;
+  f.log_evidence = step.log_evidence;
+  f.self_evidence = step.self_evidence;
+  if (step.best.edge >= 0) {
+    f.edge_from_frame = FrameOf(filter_.graph().edge(step.best.edge).from);
+    f.edge_to_frame = FrameOf(filter_.graph().edge(step.best.edge).to);
+  }
+  f.error_m = LocationError(k, step.best);
+
+  const PoseId id(static_cast<std::int64_t>(k));
+  result_.graph.vertices[id] = {id, in.odometry, k == 0};
+  if (k > 0) {
+    const double root_d = std::sqrt(std::max(u.translation().norm(), uncertainty.min_distance_m));
+    const Eigen::Matrix3d information = InformationOf(
+        Eigen::Vector3d(uncertainty.odometry_m_per_sqrt_m, uncertainty.odometry_m_per_sqrt_m,
+                        uncertainty.odometry_rad_per_sqrt_m) *
+        root_d);
+    result_.graph.constraints.push_back({ClosureId(static_cast<std::int64_t>(result_.graph.constraints.size())),
+                                         PoseId(static_cast<std::int64_t>(k - 1)), id, {u, information},
+                                         ClosureKind::kOdometry, {}, {}, {}, {}});
+  }
+  if (step.closure) {
+    f.closure = true;
+    f.matched_frame = FrameOf(step.matched_node);
+    LoopClosure c;
+    c.id = static_cast<int>(result_.graph.constraints.size());
+    c.frame = f.frame;
+    c.matched_frame = f.matched_frame;
+    c.T_frame_matched = step.T_node_matched;
+    c.hypothesis = step.best.value;
+    c.error_m = f.error_m;
+    c.injected = aliasing.false_match >= 0;
+    c.vetoed = aliasing.vetoed;
+    AddClosure(c, 1.0);
+    // CAT-Graph+: what this visual closure validated or discarded.
+    const int reference = ReferenceClosure(step);
+    for (const InferredClosure& inferred : step.inferred) {
+      LoopClosure i;
+      i.id = static_cast<int>(result_.graph.constraints.size());
+      i.kind = ClosureKind::kOdometryInferred;
+      i.frame = FrameOf(inferred.node);
+      i.matched_frame = FrameOf(inferred.matched_node);
+      i.T_frame_matched = inferred.T_node_matched;
+      i.hypothesis = inferred.location.value;
+      i.error_m = LocationError(static_cast<std::size_t>(i.frame), inferred.location);
+      i.parents = {reference, c.id};
+      AddClosure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inferred.size()) : 1.0);
+    }
+    for (const InferredClosure& inferred : step.discarded) Discard(inferred, reference, c.id, DiscardReason::kTotalPath);
+    visual_closure_of_frame_[f.frame] = c.id;
+  }
+  for (const InferredClosure& inferred : step.lost) Discard(inferred, ReferenceClosure(step), -1, step.lost_reason);
+  f.inference_pending = step.inference_pending;
+  result_.frames.push_back(f);
+  return result_.frames.back();
+}
+
+LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& observations,
+                            const ObservationModel& model, const LocalizationOptions& options) {
   if (observations.size() != d.frames.size()) {
     throw std::invalid_argument("Localize: " + std::to_string(observations.size()) + " observations for " +
                                 std::to_string(d.frames.size()) + " frames");
   }
-  // The aliasing of every frame; the filter's node of frame k is k.
+  // The false matches imposed on each frame.
   std::vector<Aliasing> aliasing(d.frames.size());
-  std::vector<bool> injected(d.frames.size(), false);
   for (const FalseVisualMatch& m : options.false_matches) {
     auto frame_ok = [&](int f) { return f >= 0 && static_cast<std::size_t>(f) < d.frames.size(); };
     if (!(frame_ok(m.first_frame) && frame_ok(m.last_frame) && frame_ok(m.matched_first_frame) &&
@@ -123,127 +262,33 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     }
     aliasing[static_cast<std::size_t>(m.first_frame)].false_match = m.matched_first_frame;
     aliasing[static_cast<std::size_t>(m.last_frame)].false_match = m.matched_last_frame;
-    injected[static_cast<std::size_t>(m.first_frame)] = injected[static_cast<std::size_t>(m.last_frame)] = true;
   }
   for (const int f : options.vetoed_frames) {
     if (f < 0 || static_cast<std::size_t>(f) >= d.frames.size()) {
       throw std::invalid_argument("Localize: vetoed frame " + std::to_string(f) + " is not a frame of the dataset");
     }
-    aliasing[static_cast<std::size_t>(f)].vetoed = true;
   }
-  CatGraphFilter filter(model, options.filter);
-  LocalizationResult result;
-  result.options = options;
-  result.observation.model = model.Name();
-  result.observation.new_place_log_offset = options.filter.new_place_log_offset.value_or(model.NewPlaceLogOffset());
-  if (const auto* holistic = dynamic_cast<const HolisticModel*>(&model)) {
-    result.observation.holistic = holistic->options();
-    result.observation.calibration = holistic->calibration();
-  }
+  Localizer localizer(model, options);
   std::vector<std::size_t> sizes;
   for (const auto& o : observations) sizes.push_back(o.words.size());
   std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(sizes.size() / 2), sizes.end());
-  result.words_per_frame_median = sizes.empty() ? 0 : sizes[sizes.size() / 2];
+  const std::size_t words_median = sizes.empty() ? 0 : sizes[sizes.size() / 2];
 
   // Odometry and (when present) ground truth at the frame times.
   const std::vector<Pose2> odometry = PosesAtFrames(d, d.odometry), truth = PosesAtFrames(d, d.ground_truth);
-  auto information_of = [](const Eigen::Vector3d& sigma) -> Eigen::Matrix3d {
-    return sigma.cwiseProduct(sigma).cwiseInverse().asDiagonal();
-  };
-  const Eigen::Matrix3d closure_information = information_of(uncertainty.closure_sigma);
-  auto odometry_information = [&](const Pose2& step) {
-    const double root_d = std::sqrt(std::max(step.translation().norm(), uncertainty.min_distance_m));
-    return information_of(Eigen::Vector3d(uncertainty.odometry_m_per_sqrt_m, uncertainty.odometry_m_per_sqrt_m,
-                                          uncertainty.odometry_rad_per_sqrt_m) *
-                          root_d);
-  };
-  auto frame_of = [&](int node) { return filter.graph().node(node).frame; };
-  auto location_error = [&](std::size_t k, const LocationHypothesis& h) {
-    if (truth.empty() || h.edge < 0) return kNoError;
-    const GraphEdge& e = filter.graph().edge(h.edge);
-    const Pose2& a = truth[static_cast<std::size_t>(frame_of(e.from))];
-    const Pose2& b = truth[static_cast<std::size_t>(frame_of(e.to))];
-    return (truth[k].translation() - InterpolateTranslation(a, b, h.alpha)).norm();
-  };
-
-  std::map<int, int> visual_closure_of_frame;  // frame -> closure id
-  // The id of the visual closure a step's inferences hung from (-1: none).
-  auto reference_closure = [&](const CatGraphStep& step) {
-    const auto found = visual_closure_of_frame.find(step.reference_node >= 0 ? frame_of(step.reference_node) : -1);
-    return found == visual_closure_of_frame.end() ? -1 : found->second;
-  };
-  auto discard = [&](const InferredClosure& inferred, int reference, int validating, DiscardReason reason) {
-    const int at = frame_of(inferred.node);
-    result.discarded_inferences.push_back({at, frame_of(inferred.matched_node), reference, validating,
-                                           location_error(static_cast<std::size_t>(at), inferred.location), reason});
-  };
-  auto add_closure = [&](const LoopClosure& c, double information_scale = 1.0) {
-    result.closures.push_back(c);
-    Provenance provenance;
-    for (const int parent : c.parents) provenance.parents.push_back(ClosureId(parent));
-    result.graph.constraints.push_back({ClosureId(c.id), PoseId(c.frame), PoseId(c.matched_frame),
-                                        {c.T_frame_matched, information_scale * closure_information}, c.kind, provenance, {}, {}, {}});
-  };
   for (std::size_t k = 0; k < d.frames.size(); ++k) {
-    const Pose2 u = k == 0 ? Pose2() : odometry[k - 1].Between(odometry[k]);
-    const CatGraphStep step = filter.Step(static_cast<int>(k), d.frames[k].timestamp_s, u, observations[k], aliasing[k]);
-    FrameLocalization f;
-    f.frame = static_cast<int>(k);
-    f.traversal = d.frames[k].traversal;
-    f.best = step.best;
-    f.new_place_probability = step.new_place_probability;
-    f.log_evidence = step.log_evidence;
-    f.self_evidence = step.self_evidence;
-    if (step.best.edge >= 0) {
-      f.edge_from_frame = frame_of(filter.graph().edge(step.best.edge).from);
-      f.edge_to_frame = frame_of(filter.graph().edge(step.best.edge).to);
-    }
-    f.error_m = location_error(k, step.best);
-
-    const PoseId id(static_cast<std::int64_t>(k));
-    result.graph.vertices[id] = {id, odometry[k], k == 0};
-    if (k > 0) {
-      result.graph.constraints.push_back({ClosureId(static_cast<std::int64_t>(result.graph.constraints.size())),
-                                          PoseId(static_cast<std::int64_t>(k - 1)), id,
-                                          {u, odometry_information(u)}, ClosureKind::kOdometry, {}, {}, {}, {}});
-    }
-    if (step.closure) {
-      f.closure = true;
-      f.matched_frame = frame_of(step.matched_node);
-      LoopClosure c;
-      c.id = static_cast<int>(result.graph.constraints.size());
-      c.frame = f.frame;
-      c.matched_frame = f.matched_frame;
-      c.T_frame_matched = step.T_node_matched;
-      c.hypothesis = step.best.value;
-      c.error_m = f.error_m;
-      c.injected = injected[k];
-      c.vetoed = aliasing[k].vetoed;
-      add_closure(c);
-      // CAT-Graph+: what this visual closure validated or discarded.
-      const int reference = reference_closure(step);
-      for (const InferredClosure& inferred : step.inferred) {
-        LoopClosure i;
-        i.id = static_cast<int>(result.graph.constraints.size());
-        i.kind = ClosureKind::kOdometryInferred;
-        i.frame = frame_of(inferred.node);
-        i.matched_frame = frame_of(inferred.matched_node);
-        i.T_frame_matched = inferred.T_node_matched;
-        i.hypothesis = inferred.location.value;
-        i.error_m = location_error(static_cast<std::size_t>(i.frame), inferred.location);
-        i.parents = {reference, c.id};
-        add_closure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inferred.size()) : 1.0);
-      }
-      for (const InferredClosure& inferred : step.discarded) discard(inferred, reference, c.id, DiscardReason::kTotalPath);
-      visual_closure_of_frame[f.frame] = c.id;
-    }
-    for (const InferredClosure& inferred : step.lost) discard(inferred, reference_closure(step), -1, step.lost_reason);
-    f.inference_pending = step.inference_pending;
-    result.frames.push_back(f);
+    FrameInput in;
+    in.time_s = d.frames[k].timestamp_s;
+    in.odometry = odometry[k];
+    in.traversal = d.frames[k].traversal;
+    if (!truth.empty()) in.truth = truth[k];
+    localizer.AddFrame(in, observations[k], aliasing[k]);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
       options.on_progress("filter", k + 1, d.frames.size());
     }
   }
+  LocalizationResult result = std::move(localizer).TakeResult();
+  result.words_per_frame_median = words_median;
   return result;
 }
 

@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -126,7 +127,7 @@ struct LocalizationResult {
   PoseGraph2 graph;               // vertex id = frame index; initial guess = odometry
   std::size_t words_per_frame_median = 0;
   // The options that made it, so that a re-run (the back end's feedback,
-  // apps/map_outcome.h) starts from them and cannot mix one run's result
+  // mapping/map_dataset.h) starts from them and cannot mix one run's result
   // with another's options.
   LocalizationOptions options;
 };
@@ -135,6 +136,17 @@ struct LocalizationResult {
 // options.threads threads. Throws FileError for an image that cannot be read.
 std::vector<WordSet> ExtractWords(const Dataset& dataset, const Vocabulary& vocabulary,
                                   const LocalizationOptions& options);
+
+// The default vocabulary: trained on the dataset's first traversal (the map,
+// never the traversals localised against it), on every `every`-th frame of
+// it, or on about 200 frames spread over it when `every` is 0. Throws
+// std::invalid_argument for every < 0, FileError for an unreadable image.
+struct MapVocabulary {
+  Vocabulary vocabulary;
+  int frames = 0;     // trained on
+  int traversal = 0;  // the first
+};
+MapVocabulary TrainMapVocabulary(const Dataset& dataset, const VocabularyOptions& options, int every = 0);
 
 // The observation of every frame, in frame order, on options.threads
 // threads: the words when `vocabulary` is given, the holistic template when
@@ -151,6 +163,56 @@ struct HolisticFrontEnd {
 };
 HolisticFrontEnd PrepareHolistic(const Dataset& dataset, const HolisticOptions& holistic,
                                  const LocalizationOptions& options);
+
+// One frame as a robot delivers it.
+struct FrameInput {
+  double time_s = 0.0;
+  // The odometry pose at the frame time, in any frame fixed for the run:
+  // the filter reads the motion since the previous frame from it.
+  Pose2 odometry;
+  int traversal = 1;            // reported (FrameLocalization::traversal), not used
+  // The true pose when known: scores the hypotheses and closures (error_m)
+  // against the true poses of the frames they match.
+  std::optional<Pose2> truth;
+};
+
+// CAT-Graph and CAT-Graph+ frame by frame, building what Localize returns
+// as the frames come: the incremental form behind Localize and the online
+// mapping::Mapper. Frame k (the k-th AddFrame) is vertex k of the pose graph.
+class Localizer {
+ public:
+  // `model` must outlive the localizer. options.vetoed_frames apply by frame
+  // number; options.false_matches are Localize's and ignored here. Throws
+  // std::invalid_argument on options out of range.
+  Localizer(const ObservationModel& model, LocalizationOptions options);
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
+
+  // Adds the next frame and returns its localization. The closures it made
+  // (a visual one, then the inferences it validated) are appended to
+  // result().closures, the inferences it discarded or dropped to
+  // result().discarded_inferences, its vertex and edges to result().graph.
+  // `aliasing` imposes a false visual match (Localize's false_matches).
+  const FrameLocalization& AddFrame(const FrameInput& frame, const Observation& z, const Aliasing& aliasing = {});
+
+  const LocalizationResult& result() const { return result_; }
+  // The result so far, moved out; the localizer is then spent.
+  LocalizationResult TakeResult() && { return std::move(result_); }
+
+ private:
+  int FrameOf(int node) const { return filter_.graph().node(node).frame; }
+  double LocationError(std::size_t frame, const LocationHypothesis& h) const;
+  void AddClosure(const LoopClosure& c, double information_scale);
+  int ReferenceClosure(const CatGraphStep& step) const;
+  void Discard(const InferredClosure& inferred, int reference, int validating, DiscardReason reason);
+
+  CatGraphFilter filter_;
+  LocalizationResult result_;
+  Eigen::Matrix3d closure_information_;
+  std::vector<std::optional<Pose2>> truth_;    // per frame
+  std::optional<Pose2> last_odometry_;
+  std::map<int, int> visual_closure_of_frame_;  // frame -> closure id
+};
 
 // The filter over frames whose observations are given (one per frame), so
 // that several runs over the same data extract the features once.

@@ -52,6 +52,17 @@ if ! awk '/visual +frame/ {n++; e = $7; sub(/^\(/, "", e); if (e + 0 > 1.0) bad+
   cat "$work/localize_dataset.txt" >&2
   exit 1
 fi
+"$examples/stream_mapper" "$work/office" > "$work/stream_mapper.txt"
+expect stream_mapper "625 frames," "$work/stream_mapper.txt"
+# Closures reported as they come, and the last online solve's map at least
+# twice as good as odometry alone.
+if ! awk '/visual +closure/ {v++} /inferred +closure/ {i++} /map re-solved/ {ate = $NF + 0}
+          END {exit !(v >= 20 && i >= 20 && ate > 0 && ate < 0.3)}' \
+     <(sed 's/ m$//' "$work/stream_mapper.txt"); then
+  echo "examples: stream_mapper: expected >= 20 visual and inferred closures and a final online ATE under 0.3 m:" >&2
+  tail -5 "$work/stream_mapper.txt" >&2
+  exit 1
+fi
 # The Python package as installed, by Debian's interpreter.
 python_path="$prefix/lib/python3/dist-packages"
 PYTHONPATH="$python_path" /usr/bin/python3 "$root/examples/robust_solve.py" > "$work/robust_solve.txt"
@@ -63,5 +74,5 @@ fi
 PYTHONPATH="$python_path" /usr/bin/python3 "$root/examples/robust_solve.py" "$work/world-outliers.g2o" \
   "$work/solved-python.g2o" > "$work/robust_solve_file.txt"
 expect robust_solve.py "20 rejected" "$work/robust_solve_file.txt"
-echo "examples: installed to $prefix; solve_g2o, false_closure and localize_dataset built against it and ran;" \
+echo "examples: installed to $prefix; solve_g2o, false_closure, localize_dataset and stream_mapper built against it and ran;" \
   "robust_solve.py ran on the installed Python package"

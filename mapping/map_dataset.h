@@ -1,13 +1,14 @@
-// The back-end stage of `catgraph map`, shared with `hierarchy-experiment`:
-// the front end's graph solved under the closure hierarchy, and how the
-// result scores — closures by kind, the injected false visual closures and
-// their children, the ATE of odometry alone and of the corrected map.
-#ifndef CATGRAPH_APPS_MAP_OUTCOME_H_
-#define CATGRAPH_APPS_MAP_OUTCOME_H_
+// The back end over a front end's result, and the offline pipeline: the
+// front end's pose graph solved robustly under the closure hierarchy, the
+// back end's verdict fed back to CAT-Graph+, and how the result scores
+// against ground truth — closures by kind, injected false visual closures
+// and their children, the ATE of odometry alone and of the corrected map.
+// Behind `catgraph map` and `hierarchy-experiment` (docs/mapping.md).
+#ifndef CATGRAPH_MAPPING_MAP_DATASET_H_
+#define CATGRAPH_MAPPING_MAP_DATASET_H_
 
 #include <map>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -18,13 +19,13 @@
 #include "frontend/localization.h"
 #include "hierarchy/closure_hierarchy.h"
 
-namespace catgraph {
+namespace catgraph::mapping {
 
 // Ground truth at every frame (vertex id = frame index); empty without truth.
 Trajectory2 TruthAtFrames(const Dataset& d);
 
-// The hierarchy options of a policy name; coupled needs the switchable
-// method. Throws std::invalid_argument.
+// The hierarchy options of a policy name ("cascade", "coupled", "flat");
+// coupled needs the switchable method. Throws std::invalid_argument.
 HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer);
 
 // Closures of one kind and how the back end decided them.
@@ -74,18 +75,27 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
 // the options `front` was made with (LocalizationResult::options) plus the
 // vetoes. Policy flat (the comparison without a hierarchy) and a front end
 // without CAT-Graph+ are solved once.
-// catgraph map's default max_reruns.
 inline constexpr int kDefaultFeedbackReruns = 3;
-struct FedBackMap {
+struct MappingResult {
   LocalizationResult front;  // the last front-end run
   MapOutcome outcome;        // its solve
   MapOutcome first;          // the first solve, before any re-run
   int reruns = 0;
 };
-FedBackMap MapWithFeedback(const Dataset& d, const std::vector<Observation>& observations, const ObservationModel& model,
-                           LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
-                           const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns);
+MappingResult SolveWithFeedback(const Dataset& d, const std::vector<Observation>& observations,
+                                const ObservationModel& model, LocalizationResult front,
+                                const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                                const Trajectory2& truth, int max_reruns = kDefaultFeedbackReruns);
 
-}  // namespace catgraph
+// The whole offline pipeline: the front end over every frame (Localize, the
+// frames streamed through the Localizer as the online Mapper streams them),
+// then SolveWithFeedback, scored against the dataset's ground truth when it
+// has one.
+MappingResult MapDataset(const Dataset& d, const std::vector<Observation>& observations,
+                         const ObservationModel& model, const LocalizationOptions& front_end,
+                         const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                         int max_reruns = kDefaultFeedbackReruns);
 
-#endif  // CATGRAPH_APPS_MAP_OUTCOME_H_
+}  // namespace catgraph::mapping
+
+#endif  // CATGRAPH_MAPPING_MAP_DATASET_H_

@@ -1,11 +1,11 @@
-#include "apps/map_outcome.h"
+#include "mapping/map_dataset.h"
 
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
 
-namespace catgraph {
+namespace catgraph::mapping {
 
 Trajectory2 TruthAtFrames(const Dataset& d) {
   Trajectory2 truth;
@@ -70,10 +70,11 @@ MapOutcome SolveMap(const LocalizationResult& r, const PoseGraphOptimizerOptions
   return m;
 }
 
-FedBackMap MapWithFeedback(const Dataset& d, const std::vector<Observation>& observations, const ObservationModel& model,
-                           LocalizationResult front, const PoseGraphOptimizerOptions& optimizer,
-                           const HierarchyOptions& hierarchy, const Trajectory2& truth, int max_reruns) {
-  FedBackMap out;
+MappingResult SolveWithFeedback(const Dataset& d, const std::vector<Observation>& observations,
+                                const ObservationModel& model, LocalizationResult front,
+                                const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                                const Trajectory2& truth, int max_reruns) {
+  MappingResult out;
   LocalizationOptions localization = front.options;
   out.outcome = SolveMap(front, optimizer, hierarchy, truth);
   out.first = out.outcome;
@@ -94,13 +95,23 @@ FedBackMap MapWithFeedback(const Dataset& d, const std::vector<Observation>& obs
   return out;
 }
 
+MappingResult MapDataset(const Dataset& d, const std::vector<Observation>& observations,
+                         const ObservationModel& model, const LocalizationOptions& front_end,
+                         const PoseGraphOptimizerOptions& optimizer, const HierarchyOptions& hierarchy,
+                         int max_reruns) {
+  return SolveWithFeedback(d, observations, model, Localize(d, observations, model, front_end), optimizer, hierarchy,
+                           TruthAtFrames(d), max_reruns);
+}
+
 HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer) {
   HierarchyOptions h;
-  h.policy = *HierarchyPolicyFromString(policy);
+  const std::optional<HierarchyPolicy> parsed = HierarchyPolicyFromString(policy);
+  if (!parsed) throw std::invalid_argument("unknown hierarchy policy '" + policy + "' (cascade, coupled or flat)");
+  h.policy = *parsed;
   if (h.policy == HierarchyPolicy::kCoupled && optimizer.method != RobustMethod::kSwitchable) {
     throw std::invalid_argument("--hierarchy coupled needs --method switchable (it couples switches)");
   }
   return h;
 }
 
-}  // namespace catgraph
+}  // namespace catgraph::mapping

@@ -1,0 +1,105 @@
+// The online mapper: a robot feeds it frame by frame (time, odometry,
+// image or its observation) and gets back, per frame, where it is on the
+// map, the closures made (visual, and the inferences a visual closure
+// validated), and, when closures arrived, the corrected map, re-solved from
+// the last solution — in the manner of Cartographer's map builder.
+//
+//   mapping::Mapper mapper(model, options);
+//   for (each frame) {
+//     const mapping::FrameResult r = mapper.AddFrame({time_s, odometry_pose}, observation);
+//     for (const LoopClosure& c : r.closures) ...   // new closures, with provenance
+//     if (r.solve) ... mapper.Map() ...             // the map corrected with them
+//   }
+//   const mapping::MapOutcome final = mapper.Solve();  // the full robust solve, as offline
+//
+// Online solves are warm-started and lighter than the offline pipeline
+// (OnlineSolveOptions); Solve() runs the back end exactly as MapDataset's
+// first solve does, so the final map of a streamed dataset equals the
+// offline one. The back end's rejections of visual closures reach CAT-Graph+
+// only offline (SolveWithFeedback re-runs the front end with them vetoed);
+// online they turn the closures' children off through the hierarchy.
+//
+// Thread-compatible: one thread feeds a Mapper.
+#ifndef CATGRAPH_MAPPING_MAPPER_H_
+#define CATGRAPH_MAPPING_MAPPER_H_
+
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "backend/graph/trajectory.h"
+#include "backend/pose_graph_optimizer.h"
+#include "frontend/localization.h"
+#include "hierarchy/closure_hierarchy.h"
+#include "mapping/map_dataset.h"
+
+namespace catgraph::mapping {
+
+struct MapperOptions {
+  LocalizationOptions front_end;         // CAT-Graph, CAT-Graph+, the pose graph's uncertainty
+  PoseGraphOptimizerOptions back_end;    // Solve(); online solves start from it (OnlineSolveOptions)
+  HierarchyOptions hierarchy;
+  // Re-solve the back end after each frame that made closures; false: only
+  // when Solve() is called.
+  bool solve_online = true;
+};
+
+// The back end's options for online solves: `back_end` from the last
+// solution (the file's guess), without the stages that re-decide from
+// scratch (narrowing, readmission), which the final Solve() runs.
+PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& back_end);
+
+// One online solve.
+struct OnlineSolve {
+  double time_s = 0.0;  // wall clock, the hierarchy's re-solves included
+  int iterations = 0;   // the last solve's robust stage and refinement
+  int accepted = 0, rejected = 0;  // closures so far
+};
+
+struct FrameResult {
+  FrameLocalization localization;
+  std::vector<LoopClosure> closures;          // made at this frame: a visual one, then the inferences it validated
+  std::vector<DiscardedInference> discarded;  // inferences discarded or dropped at this frame
+  std::optional<OnlineSolve> solve;           // the re-solve these closures caused
+};
+
+class Mapper {
+ public:
+  // `model` must outlive the mapper. Throws std::invalid_argument on options
+  // out of range.
+  Mapper(const ObservationModel& model, MapperOptions options);
+  Mapper(const Mapper&) = delete;
+  Mapper& operator=(const Mapper&) = delete;
+
+  // Adds the next frame (vertex frames().size() of the pose graph). Throws
+  // std::runtime_error when an online solve fails.
+  FrameResult AddFrame(const FrameInput& frame, const Observation& z);
+
+  // Every frame's pose: the last solve's for the frames it had, each later
+  // frame chained to the last of them by odometry; odometry alone before the
+  // first solve.
+  Trajectory2 Map() const;
+  // What the last online solve decided about each closure; empty before it.
+  const std::map<ClosureId, ClosureDecision>& decisions() const { return decisions_; }
+  // The front end's result so far: frames, closures, the pose graph.
+  const LocalizationResult& front_end() const { return localizer_.result(); }
+
+  // The back end on everything so far with options.back_end, from the
+  // odometry (not warm-started: the offline pipeline's solve), scored
+  // against `truth` (vertex id = frame; may be empty). Throws
+  // std::runtime_error when the solver fails.
+  MapOutcome Solve(const Trajectory2& truth = {}) const;
+
+ private:
+  OnlineSolve SolveOnline();
+
+  MapperOptions options_;
+  PoseGraphOptimizerOptions online_;
+  Localizer localizer_;
+  Trajectory2 solved_;                             // the last online solve's poses
+  std::map<ClosureId, ClosureDecision> decisions_;
+};
+
+}  // namespace catgraph::mapping
+
+#endif  // CATGRAPH_MAPPING_MAPPER_H_
