@@ -164,8 +164,13 @@ struct HolisticFrontEnd {
 HolisticFrontEnd PrepareHolistic(const Dataset& dataset, const HolisticOptions& holistic,
                                  const LocalizationOptions& options);
 
-// One frame as a robot delivers it.
+// One frame as a robot delivers it: {time_s, odometry} or with the rest.
 struct FrameInput {
+  FrameInput() = default;
+  FrameInput(double time, const Pose2& odometry_pose, int traversal_number = 1,
+             std::optional<Pose2> true_pose = std::nullopt)
+      : time_s(time), odometry(odometry_pose), traversal(traversal_number), truth(true_pose) {}
+
   double time_s = 0.0;
   // The odometry pose at the frame time, in any frame fixed for the run:
   // the filter reads the motion since the previous frame from it.

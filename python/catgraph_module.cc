@@ -6,6 +6,7 @@
 // docs/python.md.
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -33,7 +34,9 @@
 #include "backend/io/trajectory_io.h"
 #include "backend/optimizer.h"
 #include "backend/pose_graph_optimizer.h"
+#include "frontend/fabmap.h"
 #include "frontend/localization.h"
+#include "mapping/mapper.h"
 #include "simulation/dataset_import.h"
 #include "simulation/manhattan_world.h"
 #include "simulation/office_simulator.h"
@@ -641,6 +644,96 @@ void BindFrontEnd(py::module_& m) {
       "inferred closures unless odometric_inference is False.");
 }
 
+// An image from Python (H x W x 3 BGR or H x W grey, uint8) as a cv::Mat
+// over the array's memory, which must outlive it.
+cv::Mat ImageOf(const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& image) {
+  if (image.ndim() == 2) {
+    return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)), CV_8UC1,
+                   const_cast<std::uint8_t*>(image.data()));
+  }
+  if (image.ndim() == 3 && image.shape(2) == 3) {
+    return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)), CV_8UC3,
+                   const_cast<std::uint8_t*>(image.data()));
+  }
+  throw std::invalid_argument("an image must be an H x W x 3 (BGR) or H x W uint8 array");
+}
+
+// The online Mapper over FAB-MAP on a vocabulary, which it keeps alive.
+struct PyMapper {
+  std::shared_ptr<const Vocabulary> vocabulary;
+  std::unique_ptr<FabMapModel> model;
+  std::unique_ptr<mapping::Mapper> mapper;
+};
+
+void BindMapping(py::module_& m) {
+  py::class_<Vocabulary, std::shared_ptr<Vocabulary>>(m, "Vocabulary", "A visual vocabulary with its Chow-Liu tree.")
+      .def_property_readonly("size", &Vocabulary::size, "words")
+      .def_static("load", &Vocabulary::Load, py::arg("path"), "as `catgraph vocabulary` writes it")
+      .def("save", &Vocabulary::Save, py::arg("path"));
+  m.def(
+      "train_map_vocabulary",
+      [](const Dataset& dataset, int words, int every) {
+        VocabularyOptions options;
+        options.words = words;
+        py::gil_scoped_release release;
+        return std::make_shared<Vocabulary>(TrainMapVocabulary(dataset, options, every).vocabulary);
+      },
+      py::arg("dataset"), py::arg("words") = 1000, py::arg("every") = 0,
+      "The default vocabulary: SIFT words trained on the dataset's first traversal (every `every`-th frame, or "
+      "about 200 frames when 0), as `catgraph map` makes it.");
+  py::class_<mapping::FrameResult>(m, "FrameResult", "What one frame brought (Mapper.add_frame).")
+      .def_property_readonly("frame", [](const mapping::FrameResult& r) { return r.localization.frame; })
+      .def_property_readonly("new_place_probability",
+                             [](const mapping::FrameResult& r) { return r.localization.new_place_probability; })
+      .def_property_readonly("matched_frame", [](const mapping::FrameResult& r) {
+        return r.localization.closure ? py::object(py::int_(r.localization.matched_frame)) : py::object(py::none());
+      }, "the frame a visual closure matched; None without one")
+      .def_readonly("closures", &mapping::FrameResult::closures, "made at this frame, with their parents")
+      .def_property_readonly("solved", [](const mapping::FrameResult& r) { return r.solve.has_value(); })
+      .def_property_readonly("solve_time_s",
+                             [](const mapping::FrameResult& r) { return r.solve ? r.solve->time_s : 0.0; })
+      .def_property_readonly("accepted", [](const mapping::FrameResult& r) { return r.solve ? r.solve->accepted : 0; })
+      .def_property_readonly("rejected", [](const mapping::FrameResult& r) { return r.solve ? r.solve->rejected : 0; });
+  py::class_<PyMapper>(m, "Mapper",
+                       "The online mapper (docs/mapping.md): frames in one at a time, closures and a corrected map "
+                       "out as they come.")
+      .def(py::init([](std::shared_ptr<Vocabulary> vocabulary, bool odometric_inference, bool solve_online) {
+             if (!vocabulary) throw std::invalid_argument("Mapper: a vocabulary is needed");
+             PyMapper p;
+             p.vocabulary = vocabulary;
+             p.model = std::make_unique<FabMapModel>(vocabulary->tree(), FabMapOptions{});
+             mapping::MapperOptions options;
+             options.front_end.filter.odometric_inference = odometric_inference;
+             options.solve_online = solve_online;
+             p.mapper = std::make_unique<mapping::Mapper>(*p.model, options);
+             return p;
+           }),
+           py::arg("vocabulary"), py::arg("odometric_inference") = true, py::arg("solve_online") = true)
+      .def(
+          "add_frame",
+          [](PyMapper& p, double time_s, const Pose2& odometry,
+             const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& image) {
+            const cv::Mat view = ImageOf(image);
+            py::gil_scoped_release release;
+            const Observation z{p.vocabulary->Words(view), {}};
+            return p.mapper->AddFrame({time_s, odometry}, z);
+          },
+          py::arg("time_s"), py::arg("odometry"), py::arg("image"),
+          "The next frame: its time, the odometry pose then (any fixed origin) and the image.")
+      .def("map", [](const PyMapper& p) { return PoseRows(p.mapper->Map()); },
+           "Every frame's pose so far, rows [x, y, theta]: the last online solve's, later frames chained by odometry")
+      .def_property_readonly("closures", [](const PyMapper& p) { return p.mapper->front_end().closures; })
+      .def_property_readonly("graph", [](const PyMapper& p) { return PyPoseGraph{p.mapper->front_end().graph}; },
+                             "the front end's pose graph so far")
+      .def(
+          "solve",
+          [](const PyMapper& p) {
+            py::gil_scoped_release release;
+            return p.mapper->Solve().solved.optimization;
+          },
+          "The back end on everything so far as `catgraph map` solves it (the closure hierarchy, cascade).");
+}
+
 }  // namespace
 }  // namespace catgraph
 
@@ -662,5 +755,6 @@ PYBIND11_MODULE(_catgraph, m) {
   BindEvaluation(m);
   BindSimulation(m);
   BindFrontEnd(m);
+  BindMapping(m);
 }
 

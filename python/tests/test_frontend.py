@@ -64,3 +64,52 @@ def test_a_corrupt_image_is_a_file_error(tmp_path):
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\x00" * 40)
     with pytest.raises(cg.FileError, match="frame.png"):
         cg.read_image(path)
+
+
+def _at(rows, t):
+    """Poses [x, y, theta] of timed rows [t, x, y, theta] at times t."""
+    theta = np.unwrap(rows[:, 3])
+    return np.stack([np.interp(t, rows[:, 0], rows[:, c]) for c in (1, 2)] + [np.interp(t, rows[:, 0], theta)], 1)
+
+
+def _aligned_rmse(estimate, truth):
+    """Position RMSE after the best rigid alignment of estimate onto truth."""
+    a, b = estimate[:, :2] - estimate[:, :2].mean(0), truth[:, :2] - truth[:, :2].mean(0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    r = (u @ vt).T
+    if np.linalg.det(r) < 0:
+        r = (u @ np.diag([1.0, -1.0]) @ vt).T
+    return float(np.sqrt(np.mean(np.sum((a @ r.T - b) ** 2, 1))))
+
+
+def test_the_mapper_takes_frames_one_at_a_time_and_corrects_the_map(office):
+    vocabulary = cg.train_map_vocabulary(office)
+    assert vocabulary.size == 1000
+    mapper = cg.Mapper(vocabulary)
+    t = np.array([f.timestamp_s for f in office.frames])
+    odometry, truth = _at(office.odometry, t), _at(office.ground_truth, t)
+    closures = []
+    for k in range(len(t)):
+        image = cg.read_image(office.image_path(k))
+        r = mapper.add_frame(t[k], cg.Pose2(*odometry[k]), image)
+        assert r.frame == k
+        assert r.solved == (len(r.closures) > 0)
+        if r.solved:
+            assert r.accepted + r.rejected == len(closures) + len(r.closures)
+        closures += r.closures
+    visual = [c for c in closures if c.kind == "visual"]
+    assert len(visual) > 0 and any(c.kind == "inferred" for c in closures)
+    # Each closure's measurement against the true relative pose of its frames.
+    def error(c):
+        true = cg.Pose2(*truth[c.frame]).between(cg.Pose2(*truth[c.matched_frame]))
+        return np.hypot(*(true.vector()[:2] - c.relative_pose.vector()[:2]))
+    # Measured: 23 visual closures, median 0.24 m, two at 1.13 m (this office at 3 frames/s).
+    assert np.median([error(c) for c in visual]) < 0.5
+    assert [c.id for c in mapper.closures] == [c.id for c in closures]
+    online = mapper.map()
+    assert online.shape == (len(t), 3)
+    assert _aligned_rmse(online, truth) < 0.5 * _aligned_rmse(odometry, truth)
+    solved = mapper.solve()
+    assert solved.summary.usable and solved.accepted + solved.rejected == len(closures)
+    with pytest.raises(ValueError, match="H x W"):
+        mapper.add_frame(t[-1] + 1.0, cg.Pose2(0, 0, 0), np.zeros((4, 4, 2), np.uint8))
