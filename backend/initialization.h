@@ -23,7 +23,7 @@ void InitializeBySpanningTree(PoseGraph3& graph, bool overwrite = false);
 // kappa and tau are SE-Sync's (robust-backend-notes.md §3). Every pose is
 // overwritten; the lowest id keeps its pose (identity if it has none). It
 // escapes the basins that trap a local solver started from chained odometry
-// (M3500b, sphere-a). Throws std::invalid_argument for a disconnected graph.
+// whose heading errors have wound the map up. Throws std::invalid_argument for a disconnected graph.
 void InitializeChordal(PoseGraph2& graph);
 void InitializeChordal(PoseGraph3& graph);
 

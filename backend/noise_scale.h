@@ -3,9 +3,8 @@
 //
 // Every robust method decides at a chi2 gate in each constraint's own
 // information (docs/backend.md). That is right when the information is
-// right or conservative, as in every real benchmark file; a file whose
-// information claims far less noise than its measurements carry (SE-Sync's
-// sphere_bignoise_vertex3: chi2 19 times its degrees of freedom at the
+// right or conservative; a file whose information claims far less noise
+// than its measurements carry (chi2 many times its degrees of freedom at the
 // optimum) has almost every true closure beyond the gate. The cycles here
 // show it without knowing which closures are true.
 #ifndef CATGRAPH_BACKEND_NOISE_SCALE_H_

@@ -68,8 +68,8 @@ struct PoseGraphOptimizerOptions {
   // With the chordal cost, chi2 is the closure's chordal cost and the gate
   // its quantile under the closure's own noise (ChordalCostQuantile: 2D
   // 24.58, 3D 68.48).
-  // Vertigo's fixed xi = 1 instead rejects a true closure whenever its error
-  // exceeds one sigma overall (173 of 895 on Vertigo's Intel).
+  // A fixed xi = 1 (Vertigo's) instead rejects a true closure whenever its
+  // error exceeds one sigma overall (docs/backend.md).
   double switch_gate_probability = 0.999;  // (0, 1)
   // The gate assumes the information is right (or conservative). When short
   // cycles of the graph show its noise to be at least
@@ -77,14 +77,12 @@ struct PoseGraphOptimizerOptions {
   // (EstimateNoiseScale, noise_scale.h), every gate-derived default (the
   // switch prior, DCS's Phi, the loss scales, GNC's threshold, kAuto's
   // truncation) is widened by the factor measured. A graph whose
-  // information is right or conservative is unaffected; SE-Sync's
-  // sphere_bignoise_vertex3 states about a 19th of its noise. Off: false.
+  // information is right or conservative is unaffected. Off: false.
   bool estimate_noise_scale = true;
   double noise_scale_threshold = 3.0;  // > 1
   NoiseScaleOptions noise_scale;
-  // The other way: a file whose information overstates its noise (Vertigo's
-  // Manhattan, about 45 times) lets false closures near the truth pass the
-  // gate. After the robust solve the short cycles of the accepted closures
+  // The other way: a file whose information states more noise than its
+  // measurements carry lets false closures near the truth pass the gate. After the robust solve the short cycles of the accepted closures
   // alone measure the noise again (the rejected ones belong to no cycle).
   // When at least `narrow_min_cycles` of them show Gaussian noise of one
   // variance (the scale at NoiseScaleOptions' upper quantile at most
@@ -137,18 +135,17 @@ struct PoseGraphOptimizerOptions {
   std::set<ClosureId> disabled_closures;
   // After a robust solve (any method but none, or a file with switches), keep
   // its decisions and re-solve the poses by plain least squares without the
-  // rejected closures and with the accepted ones at full weight. A rejected
-  // closure keeps a weight of up to 0.5 in the robust solve, and 1000 of
-  // them move Manhattan's ATE from 0.79 m to 1.12 m; refined, 0.79 m.
+  // rejected closures and with the accepted ones at full weight: a rejected
+  // closure keeps a weight of up to 0.5 in the robust solve, and many of
+  // them together bend the map (docs/backend.md).
   bool refine = true;
   // With `refine`, the robust solve's map is replaced, and only its
   // decisions are kept: it ends as soon as they have settled, that is when
   // no decision has changed over the last `settled_iterations` iterations
   // that lowered the cost and the last of them lowered it by less than
   // `settled_decrease` (relative), instead of polishing a map the
-  // refinement re-solves (Manhattan + 1000 false closures: 16 iterations of
-  // 0.15-0.2 s, the last 10 changing the cost by 5e-4 in all and no
-  // decision). Not for GNC, whose rounds have their own schedule. Off: false.
+  // refinement re-solves. Not for GNC, whose rounds have their own schedule.
+  // Off: false.
   bool stop_when_settled = true;
   int settled_iterations = 2;      // >= 1
   double settled_decrease = 1e-4;  // > 0

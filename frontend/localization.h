@@ -73,10 +73,10 @@ std::string_view ToString(DiscardReason reason);
 // The uncertainty the result's pose graph gives its edges, for the back end.
 // The spec (§2.9) gives every edge the filter's Q: a particle diffusion per
 // frame, as loose as the step itself for odometry (0.05 m on 0.053 m steps)
-// and five times tighter than a closure's real error in heading. Solved with
-// it, office-change's map shrank by a tenth (ATE 1.8 m against 1.3 m for
-// odometry alone) and true visual closures were rejected; with these
-// defaults the ATE is 0.09 m (docs/mapping.md).
+// and five times tighter than a closure's real error in heading: solved
+// with it, the map shrinks and true visual closures are rejected. These
+// defaults model odometry as a random walk and closures by the front end's
+// measured error (docs/mapping.md "Edge uncertainty").
 struct PoseGraphUncertainty {
   // Odometry as a random walk: sigma = k sqrt(d) over d metres (at least
   // min_distance_m), translation in m/sqrt(m), heading in rad/sqrt(m).
