@@ -166,7 +166,7 @@ void Localizer::Discard(const InferredClosure& inferred, int reference, int vali
                                           LocationError(static_cast<std::size_t>(at), inferred.location), reason});
 }
 
-const FrameLocalization& Localizer::AddFrame(const FrameInput& in, const Observation& z, const Aliasing& imposed) {
+FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z, const Aliasing& imposed) {
   const PoseGraphUncertainty& uncertainty = result_.options.graph_uncertainty;
   const std::size_t k = result_.frames.size();
   Aliasing aliasing = imposed;
@@ -233,7 +233,7 @@ const FrameLocalization& Localizer::AddFrame(const FrameInput& in, const Observa
   for (const InferredClosure& inferred : step.lost) Discard(inferred, ReferenceClosure(step), -1, step.lost_reason);
   f.inference_pending = step.inference_pending;
   result_.frames.push_back(f);
-  return result_.frames.back();
+  return f;
 }
 
 LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& observations,

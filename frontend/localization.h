@@ -198,7 +198,7 @@ class Localizer {
   // result().closures, the inferences it discarded or dropped to
   // result().discarded_inferences, its vertex and edges to result().graph.
   // `aliasing` imposes a false visual match (Localize's false_matches).
-  const FrameLocalization& AddFrame(const FrameInput& frame, const Observation& z, const Aliasing& aliasing = {});
+  FrameLocalization AddFrame(const FrameInput& frame, const Observation& z, const Aliasing& aliasing = {});
 
   const LocalizationResult& result() const { return result_; }
   // The result so far, moved out; the localizer is then spent.
