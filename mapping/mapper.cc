@@ -2,20 +2,30 @@
 
 #include <chrono>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace catgraph::mapping {
 
-PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& back_end) {
+PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& back_end, int max_iterations) {
   PoseGraphOptimizerOptions online = back_end;
   online.initial_guess = InitialGuess::kFile;
+  online.estimate_noise_scale = false;
   online.narrow_gate = false;
+  online.refine = false;
   online.readmit = false;
+  online.solver.max_iterations = max_iterations;
   return online;
 }
 
 Mapper::Mapper(const ObservationModel& model, MapperOptions options)
-    : options_(std::move(options)), online_(OnlineSolveOptions(options_.back_end)), localizer_(model, options_.front_end) {
+    : options_(std::move(options)),
+      online_(OnlineSolveOptions(options_.back_end, options_.online_max_iterations)),
+      localizer_(model, options_.front_end) {
+  if (options_.online_max_iterations < 1) {
+    throw std::invalid_argument("Mapper: online_max_iterations must be >= 1, not " +
+                                std::to_string(options_.online_max_iterations));
+  }
   Validate(options_.back_end);
   Validate(online_);
   if (options_.hierarchy.policy == HierarchyPolicy::kCoupled && options_.back_end.method != RobustMethod::kSwitchable) {
@@ -65,7 +75,7 @@ OnlineSolve Mapper::SolveOnline() {
   for (const ClosureDecision& c : result.closures) decisions_.emplace(c.id, c);
   OnlineSolve out;
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  out.iterations = result.summary.iterations + (result.refinement ? result.refinement->iterations : 0);
+  out.iterations = result.summary.iterations;
   out.accepted = static_cast<int>(result.accepted);
   out.rejected = static_cast<int>(result.rejected);
   return out;

@@ -204,6 +204,9 @@ TEST_CASE("the Mapper refuses options out of range", "[mapping]") {
   MapperOptions gate;
   gate.back_end.switch_gate_probability = 1.0;
   CHECK_THROWS_WITH(Mapper(model, gate), Catch::Contains("switch_gate_probability"));
+  MapperOptions iterations;
+  iterations.online_max_iterations = 0;
+  CHECK_THROWS_WITH(Mapper(model, iterations), Catch::Contains("online_max_iterations"));
   MapperOptions filter;
   filter.front_end.filter.num_particles = 0;
   CHECK_THROWS_AS(Mapper(model, filter), std::invalid_argument);
