@@ -12,10 +12,9 @@
 //   }
 //   const mapping::MapOutcome final = mapper.Solve();  // the full robust solve, as offline
 //
-// Online solves are warm-started and lighter than the offline pipeline
-// (OnlineSolveOptions): a few iterations from the last map; Solve() runs the back end exactly as MapDataset's
-// first solve does, so the final map of a streamed dataset equals the
-// offline one. The back end's rejections of visual closures reach CAT-Graph+
+// Online solves are a few iterations from the last map (OnlineSolveOptions);
+// Solve() runs the back end exactly as MapDataset's first solve does, so the
+// final map of a streamed dataset equals the offline one. The back end's rejections of visual closures reach CAT-Graph+
 // only offline (SolveWithFeedback re-runs the front end with them vetoed);
 // online they turn the closures' children off through the hierarchy.
 //
@@ -78,8 +77,8 @@ class Mapper {
   Mapper(const Mapper&) = delete;
   Mapper& operator=(const Mapper&) = delete;
 
-  // Adds the next frame (vertex frames().size() of the pose graph). Throws
-  // std::runtime_error when an online solve fails.
+  // Adds the next frame, vertex front_end().frames.size() of the pose graph.
+  // Throws std::runtime_error when an online solve fails.
   FrameResult AddFrame(const FrameInput& frame, const Observation& z);
 
   // Every frame's pose: the last solve's for the frames it had, each later
