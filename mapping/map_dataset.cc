@@ -103,14 +103,19 @@ MappingResult MapDataset(const Dataset& d, const std::vector<Observation>& obser
                            TruthAtFrames(d), max_reruns);
 }
 
+void CheckHierarchyForFrontEnd(const HierarchyOptions& hierarchy, const PoseGraphOptimizerOptions& optimizer) {
+  if (hierarchy.policy == HierarchyPolicy::kCoupled && optimizer.method != RobustMethod::kSwitchable) {
+    throw std::invalid_argument("the coupled hierarchy needs the switchable method (it couples switches), not " +
+                                std::string(ToString(optimizer.method)));
+  }
+}
+
 HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer) {
   HierarchyOptions h;
   const std::optional<HierarchyPolicy> parsed = HierarchyPolicyFromString(policy);
   if (!parsed) throw std::invalid_argument("unknown hierarchy policy '" + policy + "' (cascade, coupled or flat)");
   h.policy = *parsed;
-  if (h.policy == HierarchyPolicy::kCoupled && optimizer.method != RobustMethod::kSwitchable) {
-    throw std::invalid_argument("--hierarchy coupled needs --method switchable (it couples switches)");
-  }
+  CheckHierarchyForFrontEnd(h, optimizer);
   return h;
 }
 

@@ -24,8 +24,13 @@ namespace catgraph::mapping {
 // Ground truth at every frame (vertex id = frame index); empty without truth.
 Trajectory2 TruthAtFrames(const Dataset& d);
 
-// The hierarchy options of a policy name ("cascade", "coupled", "flat");
-// coupled needs the switchable method. Throws std::invalid_argument.
+// A front end's pose graph carries no switches, so the coupled hierarchy,
+// which couples them, needs the switchable method. Throws
+// std::invalid_argument otherwise.
+void CheckHierarchyForFrontEnd(const HierarchyOptions& hierarchy, const PoseGraphOptimizerOptions& optimizer);
+
+// The hierarchy options of a policy name ("cascade", "coupled", "flat"),
+// checked by CheckHierarchyForFrontEnd. Throws std::invalid_argument.
 HierarchyOptions HierarchyOptionsFor(const std::string& policy, const PoseGraphOptimizerOptions& optimizer);
 
 // Closures of one kind and how the back end decided them.

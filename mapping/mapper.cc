@@ -28,9 +28,7 @@ Mapper::Mapper(const ObservationModel& model, MapperOptions options)
   }
   Validate(options_.back_end);
   Validate(online_);
-  if (options_.hierarchy.policy == HierarchyPolicy::kCoupled && options_.back_end.method != RobustMethod::kSwitchable) {
-    throw std::invalid_argument("Mapper: the coupled hierarchy needs the switchable method (it couples switches)");
-  }
+  CheckHierarchyForFrontEnd(options_.hierarchy, options_.back_end);
 }
 
 FrameResult Mapper::AddFrame(const FrameInput& frame, const Observation& z) {
