@@ -25,7 +25,7 @@ void AddImportCommand(CLI::App& app, std::ostream& out) {
       "said so in meta.json. docs/import.md.");
   cmd->add_option("layout", o->layout, "folder, kitti or tum")
       ->required()
-      ->check(CLI::IsMember({"folder", "kitti", "tum"}, CLI::ignore_case));
+      ->check(CLI::IsMember(ImportLayoutNames(), CLI::ignore_case));
   cmd->add_option("source", o->source,
                   "The image folder (folder), the sequence folder with image_0/ and times.txt (kitti), or the "
                   "folder with rgb.txt and groundtruth.txt (tum)")

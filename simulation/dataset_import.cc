@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "backend/graph/name_table.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
@@ -237,6 +238,12 @@ std::vector<SourceFrame> FolderFrames(const std::filesystem::path& dir, const st
   return frames;
 }
 
+constexpr NameTable<ImportLayout, 3> kImportLayoutNames = {{
+    {ImportLayout::kFolder, "folder"},
+    {ImportLayout::kKitti, "kitti"},
+    {ImportLayout::kTum, "tum"},
+}};
+
 void ValidateOptions(const ImportOptions& o) {
   if (!(o.traversal_gap_s > 0.0 && std::isfinite(o.traversal_gap_s))) {
     throw std::invalid_argument("traversal_gap_s: expected a finite number of seconds > 0");
@@ -247,21 +254,13 @@ void ValidateOptions(const ImportOptions& o) {
 
 }  // namespace
 
-std::string_view ToString(ImportLayout layout) {
-  switch (layout) {
-    case ImportLayout::kFolder: return "folder";
-    case ImportLayout::kKitti: return "kitti";
-    case ImportLayout::kTum: return "tum";
-  }
-  return "?";
-}
+std::string_view ToString(ImportLayout layout) { return NameOf(kImportLayoutNames, layout); }
 
 std::optional<ImportLayout> ImportLayoutFromString(std::string_view text) {
-  for (const ImportLayout l : {ImportLayout::kFolder, ImportLayout::kKitti, ImportLayout::kTum}) {
-    if (text == ToString(l)) return l;
-  }
-  return std::nullopt;
+  return ValueOf(kImportLayoutNames, text);
 }
+
+std::vector<std::string> ImportLayoutNames() { return NamesOf(kImportLayoutNames); }
 
 ImportSummary ImportDataset(ImportLayout layout, const std::filesystem::path& source,
                             const std::filesystem::path& output, const ImportOptions& options) {

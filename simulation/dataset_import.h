@@ -40,6 +40,7 @@ namespace catgraph {
 enum class ImportLayout { kFolder, kKitti, kTum };
 std::string_view ToString(ImportLayout layout);
 std::optional<ImportLayout> ImportLayoutFromString(std::string_view text);  // "folder", "kitti", "tum"
+std::vector<std::string> ImportLayoutNames();  // every spelling ImportLayoutFromString accepts
 
 struct ImportOptions {
   // folder: the image timestamps, one per line in the images' name order;
