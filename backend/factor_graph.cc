@@ -68,6 +68,8 @@ int Values::BlockSize(VariableKind kind) {
   return 0;
 }
 
+int Values::TangentSize(VariableKind kind) { return kind == VariableKind::kPose3 ? 6 : BlockSize(kind); }
+
 std::vector<Key> Values::keys() const {
   std::vector<Key> keys;
   keys.reserve(entries_.size());

@@ -71,6 +71,9 @@ class Values {
   double* MutableBlock(Key key);
   const double* Block(Key key) const;
   static int BlockSize(VariableKind kind);
+  // The size of the space the optimiser steps in (optimizer.h): a Pose3's
+  // is 6, every other kind's its block size.
+  static int TangentSize(VariableKind kind);
   std::vector<Key> keys() const;
 
  private:

@@ -1,6 +1,9 @@
 #include "backend/optimizer.h"
 
+#include <dlfcn.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -14,6 +17,8 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <ceres/ceres.h>
+
+#include "backend/elimination_ordering.h"
 
 namespace catgraph {
 namespace {
@@ -65,8 +70,6 @@ namespace {
 
 using Pose3Manifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
 
-int TangentSize(VariableKind kind) { return kind == VariableKind::kPose3 ? 6 : Values::BlockSize(kind); }
-
 // The factors over `values`' blocks as a ceres::Problem (which keeps
 // pointers into `values`), with their robust losses and bounds.
 void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem) {
@@ -99,6 +102,48 @@ void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& prob
     if (values.Contains(key)) problem.SetParameterBlockConstant(values.MutableBlock(key));
   }
 }
+
+// The threads of the factorisation's dense kernels, for one solve: the
+// solve's num_threads for OpenBLAS (which would otherwise start one per
+// core), and with one thread none for OpenMP (CHOLMOD's supernodal step
+// asks it for four whatever the machine, which on two cores cost a fifth
+// of a large solve's time in switching; BENCHMARKS.md). One thread leaves
+// the other cores to the caller. Both settings are process-wide, so they
+// are restored afterwards; found at run time, so that a BLAS or an OpenMP
+// other than these is left as it is.
+class DenseKernelThreads {
+ public:
+  explicit DenseKernelThreads(int threads) {
+    if (set_blas_ && get_blas_) {
+      blas_before_ = get_blas_();
+      set_blas_(threads);
+    }
+    if (threads == 1 && set_levels_ && get_levels_) {
+      levels_before_ = get_levels_();
+      set_levels_(0);
+    }
+  }
+  ~DenseKernelThreads() {
+    if (blas_before_ > 0) set_blas_(blas_before_);
+    if (levels_before_ >= 0) set_levels_(levels_before_);
+  }
+  DenseKernelThreads(const DenseKernelThreads&) = delete;
+  DenseKernelThreads& operator=(const DenseKernelThreads&) = delete;
+
+ private:
+  template <typename F>
+  static F* Find(const char* name) {
+    return reinterpret_cast<F*>(dlsym(RTLD_DEFAULT, name));
+  }
+  using SetInt = void(int);
+  using GetInt = int();
+  SetInt* set_blas_ = Find<SetInt>("openblas_set_num_threads");
+  GetInt* get_blas_ = Find<GetInt>("openblas_get_num_threads");
+  SetInt* set_levels_ = Find<SetInt>("omp_set_max_active_levels");
+  GetInt* get_levels_ = Find<GetInt>("omp_get_max_active_levels");
+  int blas_before_ = 0;
+  int levels_before_ = -1;
+};
 
 ceres::Problem::Options ProblemOptions() {
   ceres::Problem::Options options;
@@ -143,6 +188,20 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  const auto ordering_start = std::chrono::steady_clock::now();
+  if (const std::vector<Key> order = FillReducingOrder(graph, values); !order.empty()) {
+    // A group per variable, in order; the blocks held constant or read by
+    // no factor (Ceres wants every block listed) last.
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (const Key key : order) ordering->AddElementToGroup(values.MutableBlock(key), ordering->NumGroups());
+    const int last = ordering->NumGroups();
+    for (const Key key : values.keys()) {
+      double* block = values.MutableBlock(key);
+      if (!ordering->IsMember(block)) ordering->AddElementToGroup(block, last);
+    }
+    solver.linear_solver_ordering = std::move(ordering);
+  }
+  const double ordering_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - ordering_start).count();
   solver.max_num_iterations = options.max_iterations;
   solver.function_tolerance = options.function_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
@@ -158,7 +217,10 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   }
 
   ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver, &problem, &ceres_summary);
+  {
+    const DenseKernelThreads threads(options.num_threads);
+    ceres::Solve(solver, &problem, &ceres_summary);
+  }
 
   Summary& s = result.summary;
   switch (ceres_summary.termination_type) {
@@ -173,8 +235,10 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   s.initial_cost = ceres_summary.initial_cost;
   s.final_cost = ceres_summary.final_cost;
   // Ceres leaves a time at -1 when its stage did not run.
-  s.time_s = std::max(0.0, ceres_summary.total_time_in_seconds);
-  s.preprocessor_time_s = std::max(0.0, ceres_summary.preprocessor_time_in_seconds);
+  // The elimination order is part of the preprocessing, computed before
+  // Ceres' own.
+  s.time_s = ordering_s + std::max(0.0, ceres_summary.total_time_in_seconds);
+  s.preprocessor_time_s = ordering_s + std::max(0.0, ceres_summary.preprocessor_time_in_seconds);
   s.linear_solver_time_s = std::max(0.0, ceres_summary.linear_solver_time_in_seconds);
   s.jacobian_time_s = std::max(0.0, ceres_summary.jacobian_evaluation_time_in_seconds);
   s.residual_time_s = std::max(0.0, ceres_summary.residual_evaluation_time_in_seconds);
@@ -206,7 +270,7 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
     }
     if (graph.constant_keys().contains(key)) continue;
     offset.emplace(key, n);
-    n += TangentSize(values.KindOf(key));
+    n += Values::TangentSize(values.KindOf(key));
   }
   for (const auto& [a, b] : pairs) {
     for (const Key key : {a, b}) {
@@ -270,7 +334,7 @@ std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, 
   std::vector<int> path;
   std::vector<Eigen::MatrixXd> out;
   for (const auto& [a, b] : pairs) {
-    const int na = TangentSize(values.KindOf(a)), nb = TangentSize(values.KindOf(b));
+    const int na = Values::TangentSize(values.KindOf(a)), nb = Values::TangentSize(values.KindOf(b));
     Eigen::MatrixXd joint = Eigen::MatrixXd::Zero(na + nb, na + nb);
     std::vector<int> starts;  // permuted row of each free tangent coordinate
     std::vector<int> free;    // its row in `joint`

@@ -19,7 +19,9 @@ struct OptimizerOptions {
   double function_tolerance = 1e-10;   // relative cost change that ends the solve; > 0
   double gradient_tolerance = 1e-12;   // max-norm of the projected gradient; > 0
   double parameter_tolerance = 1e-10;  // relative step size; > 0
-  int num_threads = 1;                 // Jacobian evaluation threads; >= 1
+  // Threads of the Jacobians' evaluation and of the factorisation's dense
+  // kernels (OpenBLAS, CHOLMOD's OpenMP); >= 1
+  int num_threads = 1;
   // A caller's test, run after every iteration that lowered the cost, on
   // the current values and that iteration's relative decrease |dF| / F.
   // When it returns true the solve ends there as converged (Ceres'
