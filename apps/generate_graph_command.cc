@@ -2,6 +2,8 @@
 #include <memory>
 #include <string>
 
+#include <CLI/CLI.hpp>
+
 #include "apps/commands.h"
 #include "backend/io/graph_io.h"
 #include "backend/io/output_directory.h"
@@ -17,6 +19,15 @@ struct GenerateGraphOptions {
 };
 
 void RunGenerateGraph(const GenerateGraphOptions& options, std::ostream& out) {
+  if (const double edges = ExpectedManhattanEdges(options.world); edges > kMaxManhattanEdges) {
+    throw CLI::ValidationError("--poses", std::to_string(options.world.num_poses) + " poses on a " +
+                                              std::to_string(options.world.grid_cells) +
+                                              "-step square would make about " +
+                                              std::to_string(static_cast<long long>(edges)) +
+                                              " edges, more than " +
+                                              std::to_string(static_cast<long long>(kMaxManhattanEdges)) +
+                                              ": widen the square (--grid-cells)");
+  }
   RefuseOutputClashes({options.output, options.truth}, {});
   const SimulatedPoseGraph2 simulated = SimulateManhattanWorld(options.world);
   WriteG2oFile(simulated.graph, options.output);

@@ -129,7 +129,7 @@ cholmod_sparse* BlockPattern(const Structure& s, const std::vector<int>& row, in
 // together with every variable any factor reads with them (a switch and
 // the two poses of its constraint). Their neighbours are a clique already,
 // and stay one as other such variables go.
-std::vector<char> FillFreeBlocks(const Structure& s) {
+std::vector<char> FillFreeVariables(const Structure& s) {
   std::vector<std::vector<int>> reading(s.keys.size());
   for (std::size_t r = 0; r < s.factors.size(); ++r) {
     for (const int b : s.factors[r]) reading[b].push_back(static_cast<int>(r));
@@ -145,7 +145,7 @@ std::vector<char> FillFreeBlocks(const Structure& s) {
     }
     std::sort(neighbours.begin(), neighbours.end());
     neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
-    // The widest residual reads b and widest - 1 others, all among the
+    // The widest factor reads b and widest - 1 others, all among the
     // neighbours: it reads every neighbour when there are no more.
     fill_free[b] = neighbours.size() <= std::max<std::size_t>(widest, 1);
   }
@@ -180,7 +180,7 @@ std::vector<Key> FillReducingOrder(const FactorGraph& graph, const Values& value
   const Structure s = StructureOf(graph, values);
   // The fill-free variables first; the others ordered on their own
   // pattern, a row per variable.
-  const std::vector<char> fill_free = FillFreeBlocks(s);
+  const std::vector<char> fill_free = FillFreeVariables(s);
   std::vector<int> order;
   std::vector<int> rest;
   std::vector<int> row(s.keys.size(), -1);

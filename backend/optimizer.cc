@@ -131,19 +131,35 @@ class DenseKernelThreads {
   DenseKernelThreads& operator=(const DenseKernelThreads&) = delete;
 
  private:
+  using SetInt = void(int);
+  using GetInt = int();
   template <typename F>
   static F* Find(const char* name) {
     return reinterpret_cast<F*>(dlsym(RTLD_DEFAULT, name));
   }
-  using SetInt = void(int);
-  using GetInt = int();
-  SetInt* set_blas_ = Find<SetInt>("openblas_set_num_threads");
-  GetInt* get_blas_ = Find<GetInt>("openblas_get_num_threads");
-  SetInt* set_levels_ = Find<SetInt>("omp_set_max_active_levels");
-  GetInt* get_levels_ = Find<GetInt>("omp_get_max_active_levels");
+  inline static SetInt* const set_blas_ = Find<SetInt>("openblas_set_num_threads");
+  inline static GetInt* const get_blas_ = Find<GetInt>("openblas_get_num_threads");
+  inline static SetInt* const set_levels_ = Find<SetInt>("omp_set_max_active_levels");
+  inline static GetInt* const get_levels_ = Find<GetInt>("omp_get_max_active_levels");
   int blas_before_ = 0;
   int levels_before_ = -1;
 };
+
+// FillReducingOrder as Ceres' ordering: a group per variable, in order, and
+// the blocks held constant or read by no factor last (Ceres wants every
+// block listed). Null where Ceres keeps its own.
+std::shared_ptr<ceres::ParameterBlockOrdering> CeresOrdering(const FactorGraph& graph, Values& values) {
+  const std::vector<Key> order = FillReducingOrder(graph, values);
+  if (order.empty()) return nullptr;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (const Key key : order) ordering->AddElementToGroup(values.MutableBlock(key), ordering->NumGroups());
+  const int last = ordering->NumGroups();
+  for (const Key key : values.keys()) {
+    double* block = values.MutableBlock(key);
+    if (!ordering->IsMember(block)) ordering->AddElementToGroup(block, last);
+  }
+  return ordering;
+}
 
 ceres::Problem::Options ProblemOptions() {
   ceres::Problem::Options options;
@@ -189,18 +205,7 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   const auto ordering_start = std::chrono::steady_clock::now();
-  if (const std::vector<Key> order = FillReducingOrder(graph, values); !order.empty()) {
-    // A group per variable, in order; the blocks held constant or read by
-    // no factor (Ceres wants every block listed) last.
-    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (const Key key : order) ordering->AddElementToGroup(values.MutableBlock(key), ordering->NumGroups());
-    const int last = ordering->NumGroups();
-    for (const Key key : values.keys()) {
-      double* block = values.MutableBlock(key);
-      if (!ordering->IsMember(block)) ordering->AddElementToGroup(block, last);
-    }
-    solver.linear_solver_ordering = std::move(ordering);
-  }
+  solver.linear_solver_ordering = CeresOrdering(graph, values);
   const double ordering_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - ordering_start).count();
   solver.max_num_iterations = options.max_iterations;
   solver.function_tolerance = options.function_tolerance;

@@ -48,6 +48,19 @@ void Validate(const ManhattanWorldOptions& o) {
   Require(o.odometry_sigma_rad > 0.0, "odometry_sigma_rad", o.odometry_sigma_rad);
   Require(o.closure_sigma_m > 0.0, "closure_sigma_m", o.closure_sigma_m);
   Require(o.closure_sigma_rad > 0.0, "closure_sigma_rad", o.closure_sigma_rad);
+  if (const double edges = ExpectedManhattanEdges(o); edges > kMaxManhattanEdges) {
+    throw std::invalid_argument("ManhattanWorldOptions: " + std::to_string(o.num_poses) + " poses on a " +
+                                std::to_string(o.grid_cells) + "-step square would make about " +
+                                std::to_string(static_cast<long long>(edges)) + " edges, more than " +
+                                std::to_string(static_cast<long long>(kMaxManhattanEdges)) +
+                                ": widen the square (grid_cells) or lower closure_probability");
+  }
+}
+
+double ExpectedManhattanEdges(const ManhattanWorldOptions& o) {
+  const double n = o.num_poses;
+  const double points = static_cast<double>(o.grid_cells) * o.grid_cells;
+  return n + o.closure_probability * n * n / (2.0 * points);
 }
 
 SimulatedPoseGraph2 SimulateManhattanWorld(const ManhattanWorldOptions& options) {

@@ -16,9 +16,13 @@
 
 namespace catgraph {
 
-// The most poses a generated world has: its closures grow with the square of
-// the poses on a fixed grid, and 50,000 poses take 3.2 GB (BENCHMARKS.md).
-inline constexpr int kMaxManhattanPoses = 50'000;
+// The most poses a generated world has, and the most edges it is expected
+// to have (ExpectedManhattanEdges): on a fixed grid its closures grow with
+// the square of the poses, and each edge takes about 560 bytes while the
+// world is built (50,000 poses on the default grid: 5.7 million edges,
+// 3.2 GB; BENCHMARKS.md).
+inline constexpr int kMaxManhattanPoses = 1'000'000;
+inline constexpr double kMaxManhattanEdges = 6.5e6;
 
 struct ManhattanWorldOptions {
   int num_poses = 500;                      // >= 2
@@ -34,8 +38,15 @@ struct ManhattanWorldOptions {
   std::uint64_t seed = 1;
 };
 
-// Throws std::invalid_argument naming the first offending field.
+// Throws std::invalid_argument naming the first offending field, or the
+// expected edges when they exceed kMaxManhattanEdges.
 void Validate(const ManhattanWorldOptions& options);
+
+// The edges a world is expected to have: the odometry, and the closures of
+// a walk that visits each of the grid's c^2 points N / c^2 times, p N^2 /
+// (2 c^2) for N poses and closure probability p (within 11 % of the
+// generated count from 10,000 to 50,000 poses on 10- and 50-step squares).
+double ExpectedManhattanEdges(const ManhattanWorldOptions& options);
 
 struct SimulatedPoseGraph2 {
   PoseGraph2 graph;  // noisy measurements, chained-odometry initial guess

@@ -72,5 +72,23 @@ TEST_CASE("invalid simulation options name the field", "[simulation]") {
   CHECK_THROWS_WITH(SimulateManhattanWorld(options), Catch::Contains("odometry_sigma_m"));
 }
 
+TEST_CASE("a world's expected edges are near the generated count, and a world expected to exceed the bound is "
+          "refused before it is built",
+          "[simulation]") {
+  for (const int cells : {10, 30}) {
+    ManhattanWorldOptions options;
+    options.num_poses = 5000;
+    options.grid_cells = cells;
+    const double generated = static_cast<double>(SimulateManhattanWorld(options).graph.constraints.size());
+    CAPTURE(cells, generated);
+    CHECK(ExpectedManhattanEdges(options) == Approx(generated).epsilon(0.15));
+  }
+  ManhattanWorldOptions options;
+  options.num_poses = 60'000;  // on the default 10-step square: about 9 million edges
+  CHECK_THROWS_WITH(SimulateManhattanWorld(options), Catch::Contains("widen the square"));
+  options.grid_cells = 300;  // about 80,000
+  CHECK_NOTHROW(Validate(options));
+}
+
 }  // namespace
 }  // namespace catgraph
