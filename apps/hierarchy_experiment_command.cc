@@ -143,7 +143,7 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
   const std::vector<Observation>& words = inputs.observations;
   const ObservationModel& model = *inputs.model;
-  LocalizationOptions localization = o.front.localization;
+  LocalizationOptions localization = o.front.pipeline.front_end;
   std::vector<Row> rows;
   for (const std::uint64_t seed : o.seeds) {
     localization.filter.seed = seed;

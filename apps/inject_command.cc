@@ -78,7 +78,7 @@ void RunInject(InjectOptions o, std::ostream& out) {
           const double information =
               o.switch_prior_information > 0.0
                   ? o.switch_prior_information
-                  : Gate<PoseT>(RelativePoseCostType::kG2o, PoseGraphOptimizerOptions{}.switch_gate_probability);
+                  : Gate<PoseT>(RelativePoseCostType::kG2o, PoseGraphOptimizerOptions{}.gate.probability);
           g.AddSwitches([](const auto& c) { return !c.IsBetweenConsecutivePoses(); },
                         SwitchPrior{1.0, information});
         },

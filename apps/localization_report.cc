@@ -17,6 +17,7 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
+#include "mapping/options_file.h"
 
 namespace catgraph {
 
@@ -37,14 +38,14 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
   auto features = std::make_shared<ProgressBar>("frames: features");
   auto filter = std::make_shared<ProgressBar>("frames: filter");
   if (!o.quiet) {
-    o.localization.on_progress = [features, filter](const char* stage, std::size_t done, std::size_t total) {
+    o.pipeline.front_end.on_progress = [features, filter](const char* stage, std::size_t done, std::size_t total) {
       (std::string(stage) == "features" ? features : filter)->Update(done, total);
     };
   }
-  o.localization.threads = o.threads;
+  o.pipeline.front_end.threads = o.threads;
   FrontEndInputs in;
   if (o.observation == ObservationKind::kHolistic) {
-    HolisticFrontEnd holistic = PrepareHolistic(d, HolisticOptions{}, o.localization);
+    HolisticFrontEnd holistic = PrepareHolistic(d, HolisticOptions{}, o.pipeline.front_end);
     const HolisticCalibration& c = holistic.model->calibration();
     out << "holistic observation model: " << holistic.model->options().width_px << " px templates, calibrated on "
         << c.frames << " frames of the first traversal: M = " << Number(c.identical_score, "%.2f") << "\n";
@@ -53,14 +54,14 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
     return in;
   }
   const Vocabulary vocabulary = VocabularyFor(d, o, out);
-  in.observations = ExtractObservations(d, &vocabulary, nullptr, o.localization);
+  in.observations = ExtractObservations(d, &vocabulary, nullptr, o.pipeline.front_end);
   in.model = std::make_unique<FabMapModel>(vocabulary.tree(), FabMapOptions{});
   return in;
 }
 
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out) {
   const FrontEndInputs in = PrepareFrontEnd(d, o, out);
-  return Localize(d, in.observations, *in.model, o.localization);
+  return Localize(d, in.observations, *in.model, o.pipeline.front_end);
 }
 
 nlohmann::ordered_json ObservationJson(const ObservationSummary& o) {
@@ -325,159 +326,178 @@ std::string FormatSigma(const Eigen::Vector3d& sigma) {
   return text.str();
 }
 
-// An option of three finite numbers > 0 (σx σy in m, σθ in rad); a bad value
-// is an error that names the option.
-void AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& default_text,
-                    const std::string& description, std::function<void(const Eigen::Vector3d&)> set) {
-  cmd.add_option_function<std::vector<double>>(
-         name,
-         [name, set](const std::vector<double>& s) {
-           const Eigen::Vector3d sigma(s[0], s[1], s[2]);
-           if (!IsValidSigma(sigma)) {
-             throw CLI::ValidationError(name, "expected three finite numbers > 0 (σx σy in m, σθ in rad)");
-           }
-           set(sigma);
-         },
-         description)
+// An option of three numbers (σx σy in m, σθ in rad).
+CLI::Option* AddSigmaOption(CLI::App& cmd, const std::string& name, const std::string& default_text,
+                            const std::string& description, std::function<void(const Eigen::Vector3d&)> set) {
+  return cmd
+      .add_option_function<std::vector<double>>(
+          name, [set](const std::vector<double>& s) { set(Eigen::Vector3d(s[0], s[1], s[2])); }, description)
       ->expected(3)
       ->default_str(default_text);
 }
 
-// The whole text as a number; NaN if it is not one. CLI11's Range and
-// NonNegativeNumber let NaN through (every comparison with it is false), so
-// the validators below read the text themselves.
-double ParseNumber(const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  return end != text.c_str() && *end == '\0' ? value : std::numeric_limits<double>::quiet_NaN();
-}
-
-// A fraction in [0, 1], or [0, 1) without `one`.
-CLI::Validator Fraction(bool one) {
-  return CLI::Validator(
-      [one](const std::string& text) -> std::string {
-        const double value = ParseNumber(text);
-        return value >= 0.0 && (one ? value <= 1.0 : value < 1.0)
-                   ? std::string()
-                   : "Value " + text + " not in range [0, 1" + (one ? "]" : ")");
-      },
-      one ? "[0, 1]" : "[0, 1)");
-}
-
-// A finite number >= 0.
-CLI::Validator NonNegative() {
-  return CLI::Validator(
-      [](const std::string& text) -> std::string {
-        const double value = ParseNumber(text);
-        return std::isfinite(value) && value >= 0.0 ? std::string() : "Value " + text + " is not a finite number >= 0";
-      },
-      "NONNEGATIVE");
-}
-
-// A finite number.
-CLI::Validator Finite() {
-  return CLI::Validator(
-      [](const std::string& text) -> std::string {
-        return std::isfinite(ParseNumber(text)) ? std::string() : "Value " + text + " is not a finite number";
-      },
-      "FINITE");
-}
-
 }  // namespace
 
-void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
-  CatGraphOptions& f = o.localization.filter;
-  AddVocabularyOptions(cmd, o);
-  cmd.add_option("--particles", f.num_particles, "n_p")->check(CLI::Range(1, kMaxParticles))->capture_default_str();
-  cmd.add_option("--closure-threshold", f.closure_threshold, "T_h")->capture_default_str();
-  cmd.add_option("--closure-min-evidence", f.closure_min_evidence,
-                 "A visual closure also needs the frame's evidence to be this fraction of its self-evidence or more "
-                 "(0: T_h alone, the spec). docs/frontend.md \"Closing on what the camera sees\"")
-      ->check(Fraction(true))
-      ->capture_default_str();
-  cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)")->capture_default_str();
-  AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),
-                 "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)",
-                 [&f](const Eigen::Vector3d& s) { f.motion_sigma = s; });
-  cmd.add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place")->capture_default_str();
-  cmd.add_option("--leave-probability", f.leave_probability, "Prior of new place while on the map")
-      ->capture_default_str();
-  cmd.add_option_function<double>(
-         "--new-place-offset", [&f](double offset) { f.new_place_log_offset = offset; },
-         "Added to log p(z | new place), in the observation model's nats (0: the spec as written)")
-      ->check(Finite())
-      ->default_str("the model's: fabmap 45, holistic 0");
-  cmd.add_option("--new-place-stay-fraction", f.new_place_stay_fraction,
-                 "What staying on the map costs, once on it, as a fraction of the offset (constant and relative "
-                 "parts), which is what entering it costs. docs/frontend.md \"Staying on the map\"")
-      ->check(Fraction(true))
-      ->capture_default_str();
-  cmd.add_option("--new-place-relative-offset", f.new_place_relative_offset,
-                 "Also added to log p(z | new place): this fraction of the frame's self-evidence (how much better "
-                 "than the mean field a node with exactly its words explains it)")
-      ->capture_default_str();
-  cmd.add_option("--observation-window", f.observation_window_m,
-                 "Eq 2 over a stretch of path: a node's likelihood is the mean over the nodes within this many "
-                 "metres of path either side (0: its own, the spec). docs/frontend.md \"What stays and what "
-                 "changes\"")
-      ->check(NonNegative())
-      ->capture_default_str();
-  cmd.add_option("--new-place-stay-relative-offset", f.new_place_stay_relative_offset,
-                 "Staying on the map also costs this fraction of the frame's self-evidence (at most what entering "
-                 "costs). docs/frontend.md \"Staying on the map\"")
-      ->check(Fraction(false))
-      ->capture_default_str();
+void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o, const std::vector<std::string>& shown) {
+  // Before every other option, so that their callbacks run first and the
+  // flags given override the preset and the file.
   cmd.add_option_function<std::string>(
-         "--new-place-motion", [&f](const std::string& name) { f.new_place_motion = *NewPlaceMotionFromString(name); },
-         "How new place weighs the odometry against its mean: noise (the filter's Q, the spec) or spread (the "
-         "odometry's own spread: a turn the map does not make takes the robot off it). docs/frontend.md")
-      ->check(CLI::IsMember(NewPlaceMotionNames()))
-      ->default_str(std::string(ToString(f.new_place_motion)));
-  AddSigmaOption(cmd, "--new-place-motion-sigma",
-                 f.new_place_motion_sigma ? FormatSigma(*f.new_place_motion_sigma) : "Q's",
-                 "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean "
-                 "(under spread, the floor under the odometry's spread). docs/frontend.md \"Corners and Q\"",
-                 [&f](const Eigen::Vector3d& s) { f.new_place_motion_sigma = s; });
+         "--preset",
+         [&o](const std::string& name) {
+           const std::optional<mapping::OptionsPreset> preset = mapping::OptionsPresetFromString(name);
+           if (!preset) throw CLI::ValidationError("--preset", "expected default or paper, not '" + name + "'");
+           o.pipeline = mapping::PresetOptions(*preset);
+         },
+         "Where the options start: default, or paper (the CAT-Graph+ paper's filter exactly: Table I and the "
+         "spec, none of catgraph's additions). docs/frontend.md \"Options\"")
+      ->default_str("default");
+  cmd.add_option_function<std::string>(
+         "--options", [&o](const std::string& path) { mapping::ReadOptionsFile(path, o.pipeline); },
+         "YAML file of options (any subset; the options.yaml a run writes is one), read over the preset; the "
+         "flags given override it. docs/file-formats.md \"Options files\"");
+  CatGraphOptions& f = o.pipeline.front_end.filter;
+  AddVocabularyOptions(cmd, o);
+  // A flag that sets a library option: the field it sets, as Validate names it.
+  auto field = [&o](CLI::Option* option, std::string name) {
+    o.option_fields.emplace_back(option, std::move(name));
+    return option;
+  };
+  field(cmd.add_option("--particles", f.num_particles, "n_p"), "num_particles")->capture_default_str();
+  field(cmd.add_option("--closure-threshold", f.closure_threshold, "T_h"), "closure_threshold")->capture_default_str();
+  field(cmd.add_option("--closure-min-evidence", f.recognition.closure_min_evidence,
+                       "A visual closure also needs the frame's evidence to be this fraction of its self-evidence or "
+                       "more (0: T_h alone, the spec). docs/frontend.md \"Closing on what the camera sees\""),
+        "recognition.closure_min_evidence")
+      ->capture_default_str();
+  field(cmd.add_option("--hypothesis-radius", f.hypothesis_radius_m, "d_h (m)"), "hypothesis_radius_m")
+      ->capture_default_str();
+  field(AddSigmaOption(cmd, "--motion-sigma", FormatSigma(f.motion_sigma),
+                       "Q = diag(σ)²: the motion noise per frame, along, across (m) and in heading (rad)",
+                       [&f](const Eigen::Vector3d& s) { f.motion_sigma = s; }),
+        "motion_sigma");
+  field(cmd.add_option("--new-place-prior", f.new_place_prior, "p_new while in a new place"), "new_place_prior")
+      ->capture_default_str();
+  field(cmd.add_option("--leave-probability", f.new_place.leave_probability, "Prior of new place while on the map"),
+        "new_place.leave_probability")
+      ->capture_default_str();
+  field(cmd.add_option_function<double>(
+            "--new-place-offset", [&f](double offset) { f.new_place.log_offset = offset; },
+            "Added to log p(z | new place), in the observation model's nats (0: the spec as written)"),
+        "new_place.log_offset")
+      ->default_str("the model's: fabmap 45, holistic 0");
+  field(cmd.add_option("--new-place-stay-fraction", f.new_place.stay_fraction,
+                       "What staying on the map costs, once on it, as a fraction of the offset, which is what "
+                       "entering it costs. docs/frontend.md \"Staying on the map\""),
+        "new_place.stay_fraction")
+      ->capture_default_str();
+  field(cmd.add_option("--observation-window", f.recognition.observation_window_m,
+                       "Eq 2 over a stretch of path: a node's likelihood is the mean over the nodes within this many "
+                       "metres of path either side (0: its own, the spec). docs/frontend.md \"What stays and what "
+                       "changes\""),
+        "recognition.observation_window_m")
+      ->capture_default_str();
+  field(cmd.add_option("--new-place-stay-relative-offset", f.new_place.stay_relative_offset,
+                       "Staying on the map also costs this fraction of the frame's self-evidence (at most what "
+                       "entering costs). docs/frontend.md \"Staying on the map\""),
+        "new_place.stay_relative_offset")
+      ->capture_default_str();
+  field(AddSigmaOption(cmd, "--new-place-motion-sigma",
+                       f.new_place.motion_sigma ? FormatSigma(*f.new_place.motion_sigma) : "Q's",
+                       "Eq 6's σ (m, m, rad): the scale a new place's odometry is weighed on against its mean. "
+                       "docs/frontend.md \"Corners and Q\"",
+                       [&f](const Eigen::Vector3d& s) { f.new_place.motion_sigma = s; }),
+        "new_place.motion_sigma");
   cmd.add_flag("--no-heading-likelihood", [&f](std::int64_t) { f.heading_in_position_likelihood = false; },
                "Eq 1 on position alone (spec §6.4 (a)): Q's heading term still spreads the particles but weighs "
                "none. docs/frontend.md \"Closing on what the camera sees\"");
-  cmd.add_flag("--hold-after-closure,!--no-hold-after-closure", f.hold_after_closure,
+  cmd.add_flag("--hold-after-closure,!--no-hold-after-closure", f.new_place.hold_after_closure,
                "Hold the robot on the map (leave probability, stay credit) only once the cloud has made a visual "
                "closure since it came onto the map (the default; --no-hold-after-closure: any mass on the map "
                "holds it). docs/frontend.md \"Held after a closure\"");
-  cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.odometric_gate = false; },
+  cmd.add_flag("--no-odometric-gate", [&f](std::int64_t) { f.gate.enabled = false; },
                "Let particles onto nodes that dead reckoning rules out");
-  cmd.add_option("--gate-base", f.odometric_gate_base_m, "Odometric gate: base (m)")->capture_default_str();
-  cmd.add_option("--gate-fraction", f.odometric_gate_fraction, "Odometric gate: fraction of the path since the node")
+  field(cmd.add_option("--gate-base", f.gate.base_m, "Odometric gate: base (m)"), "gate.base_m")->capture_default_str();
+  field(cmd.add_option("--gate-fraction", f.gate.fraction, "Odometric gate: fraction of the path since the node"),
+        "gate.fraction")
       ->capture_default_str();
-  cmd.add_flag("--no-odometric-inference", [&f](std::int64_t) { f.odometric_inference = false; },
+  cmd.add_flag("--no-odometric-inference", [&f](std::int64_t) { f.inference.enabled = false; },
                "CAT-Graph alone: no odometry-inferred closures (CAT-Graph+ is the default)");
-  cmd.add_option("--d-loc", f.local_validation_m, "CAT-Graph+ local validation d_loc (m)")->capture_default_str();
-  cmd.add_option("--d-tot", f.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)")->capture_default_str();
-  cmd.add_option("--total-path-retries", f.total_path_retries,
-                 "CAT-Graph+: carry the pending inferences past this many visual closures in a row that they fail "
-                 "total-path validation against (0: the spec). docs/catgraph-plus.md \"A chain against a false "
-                 "closure\"")
-      ->check(CLI::Range(0, 100))
+  field(cmd.add_option("--d-loc", f.inference.local_validation_m, "CAT-Graph+ local validation d_loc (m)"),
+        "inference.local_validation_m")
       ->capture_default_str();
-  cmd.add_option("--odometric-particle-factor", f.odometric_particle_factor,
-                 "CAT-Graph+: the odometric filter starts from this many copies of each visual particle (1: the "
-                 "spec's copy of the visual filter)")
-      ->check(CLI::Range(1, 100))
+  field(cmd.add_option("--d-tot", f.inference.total_validation_m, "CAT-Graph+ total-path validation d_tot (m)"),
+        "inference.total_validation_m")
       ->capture_default_str();
-  AddSigmaOption(cmd, "--odometric-motion-sigma", "--motion-sigma's",
-                 "CAT-Graph+: the odometric filter's Q, σ per frame (m, m, rad). docs/catgraph-plus.md \"O's "
-                 "along-track wander\"",
-                 [&f](const Eigen::Vector3d& s) { f.odometric_motion_sigma = s; });
-  cmd.add_flag("--odometric-seed-all", [&f](std::int64_t) { f.odometric_seed_local = false; },
+  field(cmd.add_option("--total-path-retries", f.inference.total_path_retries,
+                       "CAT-Graph+: carry the pending inferences past this many visual closures in a row that they "
+                       "fail total-path validation against (0: the spec). docs/catgraph-plus.md \"A chain against a "
+                       "false closure\""),
+        "inference.total_path_retries")
+      ->capture_default_str();
+  field(cmd.add_option("--odometric-particle-factor", f.inference.particle_factor,
+                       "CAT-Graph+: the odometric filter starts from this many copies of each visual particle (1: "
+                       "the spec's copy of the visual filter)"),
+        "inference.particle_factor")
+      ->capture_default_str();
+  field(AddSigmaOption(cmd, "--odometric-motion-sigma", "--motion-sigma's",
+                       "CAT-Graph+: the odometric filter's Q, σ per frame (m, m, rad). docs/catgraph-plus.md \"O's "
+                       "along-track wander\"",
+                       [&f](const Eigen::Vector3d& s) { f.inference.motion_sigma = s; }),
+        "inference.motion_sigma");
+  cmd.add_flag("--odometric-seed-all", [&f](std::int64_t) { f.inference.seed_local = false; },
                "CAT-Graph+: the odometric filter starts from every visual particle (the spec), not only those within "
                "d_h of the visual match");
-  cmd.add_flag("--panoramic", [&f](std::int64_t) { f.forward_camera = false; },
+  cmd.add_flag("--panoramic", [&f](std::int64_t) { f.recognition.forward_camera = false; },
                "The camera sees all round: particles facing either way use the nodes' words, and either way they close "
                "(a forward camera facing against the nodes makes no visual closure)");
-  cmd.add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)")->capture_default_str();
-  cmd.add_option("--exclusion-m", f.exclusion_window_m, "Self-match exclusion window (m of path)")->capture_default_str();
+  field(cmd.add_option("--exclusion-s", f.exclusion_window_s, "Self-match exclusion window (s)"), "exclusion_window_s")
+      ->capture_default_str();
+  field(cmd.add_option("--exclusion-m", f.exclusion_window_m, "Self-match exclusion window (m of path)"),
+        "exclusion_window_m")
+      ->capture_default_str();
   cmd.add_option("--seed", f.seed, "Filter seed")->capture_default_str();
+  // Out of --help, yet named in errors (an option of the empty group, CLI11's
+  // hidden one, has no name there).
+  class Formatter : public CLI::Formatter {
+   public:
+    std::string make_group(std::string group, bool is_positional, std::vector<const CLI::Option*> opts) const override {
+      return group == kUnlistedGroup ? std::string() : CLI::Formatter::make_group(group, is_positional, opts);
+    }
+  };
+  cmd.formatter(std::make_shared<Formatter>());
+  cmd.footer("Every other option is a key of --options FILE (docs/file-formats.md \"Options files\"); the flags "
+             "that also set some of them are listed in docs/cli.md.");
+  for (CLI::Option* option : cmd.get_options()) {
+    const std::string& name = option->get_name();
+    if (name.starts_with("--") && name != "--help" && name != "--preset" && name != "--options" &&
+        std::find(shown.begin(), shown.end(), name) == shown.end()) {
+      option->group(kUnlistedGroup);
+    }
+  }
+}
+
+void ValidateOptions(const LocalizeCommandOptions& o) {
+  try {
+    mapping::Validate(o.pipeline);
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    std::vector<std::string> fields;
+    for (const auto& [option, name] : o.option_fields) {
+      if (option->count() > 0) fields.push_back(name);
+    }
+    const std::string named = mapping::FieldNamedBy(what, fields);
+    for (const auto& [option, name] : o.option_fields) {
+      if (option->count() > 0 && name == named) throw CLI::ValidationError(option->get_name(), what);
+    }
+    throw;
+  }
+}
+
+void WriteOptions(const std::filesystem::path& dir, const LocalizeCommandOptions& o) {
+  WriteFileAtomically(dir / "options.yaml", [&o](std::ostream& out) {
+    out << "# catgraph: the options of this run; catgraph localize|map --options options.yaml runs it again.\n"
+        << mapping::OptionsYaml(o.pipeline);
+  });
 }
 
 }  // namespace catgraph

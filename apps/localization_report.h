@@ -18,6 +18,7 @@
 #include "backend/io/dataset.h"
 #include "backend/io/output_directory.h"
 #include "frontend/localization.h"
+#include "mapping/mapper.h"
 
 namespace catgraph {
 
@@ -25,9 +26,24 @@ struct LocalizeCommandOptions {
   std::string dataset, vocabulary, output;
   ObservationKind observation = ObservationKind::kFabMap;
   int words = 500, train_every = 0, threads = 0;
-  LocalizationOptions localization;
+  // Every library option: --preset, then --options FILE, then the flags.
+  // `localize` uses the front end's; `map` all of them.
+  mapping::MapperOptions pipeline;
+  // The flags that set a library option, and the field each sets as the
+  // libraries' Validate names it (ValidateOptions).
+  std::vector<std::pair<const CLI::Option*, std::string>> option_fields;
   bool quiet = false, overwrite = false;
 };
+
+// After parsing: the library's Validate on every option; a field it refuses
+// that a flag set is that flag's error (CLI::ValidationError, naming the
+// flag), else a std::invalid_argument. The ranges live in the libraries
+// alone.
+void ValidateOptions(const LocalizeCommandOptions& o);
+
+// options.yaml in `dir`: every option the run used (mapping/options_file.h),
+// for --options to run it again.
+void WriteOptions(const std::filesystem::path& dir, const LocalizeCommandOptions& o);
 
 // The output folder of `command` run on `o.dataset` (and `o.vocabulary`):
 // checked before any work, committed by the caller when every file is in it.
@@ -35,8 +51,18 @@ OutputDirectory OpenOutputDirectory(const LocalizeCommandOptions& o, const std::
 
 // The vocabulary options (--vocabulary, --words, --train-every) on `cmd`.
 void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o);
-// The vocabulary and filter options of `localize` (and `map`) on `cmd`.
-void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o);
+// The group of the options a command's --help does not list (they are
+// listed in docs/cli.md); AddLocalizationOptions' formatter leaves it out.
+inline constexpr const char* kUnlistedGroup = "unlisted";
+
+// The vocabulary and filter options of `localize` (and `map`) on `cmd`:
+// --preset and --options first (so that the flags given override them), the
+// flags named in `shown` in --help, the others accepted but listed only in
+// docs/cli.md (an options file is the place for them).
+void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o,
+                            const std::vector<std::string>& shown = {"--observation", "--vocabulary", "--particles",
+                                                                     "--seed", "--no-odometric-inference", "--d-loc",
+                                                                     "--d-tot"});
 
 // The shape of injected false visual matches (--false-stretch,
 // --false-min-error, --false-max-error) on `cmd`; the count is the caller's.
@@ -58,7 +84,7 @@ struct FrontEndInputs {
 // FAB-MAP on the vocabulary (VocabularyFor), or the holistic model
 // calibrated on the first traversal; with progress bars unless `o.quiet`
 // (which also shows the filter's progress in later runs with
-// `o.localization`).
+// `o.pipeline.front_end`).
 FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
 
 // PrepareFrontEnd, then CAT-Graph (and CAT-Graph+) over the dataset.

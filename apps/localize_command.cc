@@ -16,7 +16,6 @@
 
 namespace catgraph {
 
-using mapping::HierarchyOptionsFor;
 using mapping::MappingResult;
 using mapping::SolveWithFeedback;
 using mapping::TruthAtFrames;
@@ -24,13 +23,15 @@ using mapping::kDefaultFeedbackReruns;
 namespace {
 
 void RunLocalize(LocalizeCommandOptions& o, std::ostream& out) {
+  ValidateOptions(o);
   OutputDirectory output = OpenOutputDirectory(o, "localize");
   const Dataset d = ReadDataset(o.dataset);
   const LocalizationResult r = RunLocalization(d, o, out);
-  WriteLocalization(output.path(), d, r, o.localization.filter.closure_threshold);
+  WriteLocalization(output.path(), d, r, o.pipeline.front_end.filter.closure_threshold);
+  WriteOptions(output.path(), o);
   output.Commit();
   out << "wrote " << o.output << ": ";
-  PrintLocalizationSummary(d, r, o.localization.filter.odometric_inference, out);
+  PrintLocalizationSummary(d, r, o.pipeline.front_end.filter.inference.enabled, out);
 }
 
 struct InferenceSweepOptions {
@@ -47,16 +48,16 @@ struct InferenceSweepOptions {
 // the features extracted once.
 void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
   if (!(o.false_threshold_m > 0.0)) throw std::invalid_argument("--false-threshold: expected > 0");
+  ValidateOptions(o.base);
   OutputDirectory output = OpenOutputDirectory(o.base, "inference-sweep");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "the sweep needs ground truth (groundtruth.csv)");
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.base, out);
-  LocalizationOptions options = o.base.localization;
+  LocalizationOptions options = o.base.pipeline.front_end;
   const std::vector<Observation>& words = inputs.observations;
   const ObservationModel& model = *inputs.model;
-  PoseGraphOptimizerOptions optimizer;
-  optimizer.method = RobustMethod::kSwitchable;
-  const HierarchyOptions hierarchy = HierarchyOptionsFor("cascade", optimizer);
+  const PoseGraphOptimizerOptions& optimizer = o.base.pipeline.back_end;
+  const HierarchyOptions& hierarchy = o.base.pipeline.hierarchy;
   const Trajectory2 truth = TruthAtFrames(d);
   std::ostringstream csv, table, accepted_table;
   csv << "d_tot_m,d_loc_m,inferred,false,largest_error_m,mean_false_error_m,mean_error_m,discarded,false_accepted,"
@@ -80,9 +81,9 @@ void RunInferenceSweep(InferenceSweepOptions& o, std::ostream& out) {
     table << "| " << Number(t, "%.1f") << " m |";
     accepted_table << "| " << Number(t, "%.1f") << " m |";
     for (const double l : o.d_loc) {
-      options.filter.odometric_inference = true;
-      options.filter.total_validation_m = t;
-      options.filter.local_validation_m = l;
+      options.filter.inference.enabled = true;
+      options.filter.inference.total_validation_m = t;
+      options.filter.inference.local_validation_m = l;
       LocalizationResult r = Localize(d, words, model, options);
       std::optional<MappingResult> mapped;
       if (o.back_end) {
@@ -137,15 +138,20 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("dataset", o->base.dataset, "Dataset directory (with ground truth)")->required();
   cmd->add_option("-o,--output", o->base.output, "Output directory")->required();
   // Every filter option of localize, but the two tolerances swept.
-  AddLocalizationOptions(*cmd, o->base);
-  for (const char* swept : {"--d-tot", "--d-loc", "--no-odometric-inference"}) cmd->remove_option(cmd->get_option(swept));
+  AddLocalizationOptions(*cmd, o->base, {"--observation", "--vocabulary", "--particles", "--seed"});
+  for (const char* swept : {"--d-tot", "--d-loc", "--no-odometric-inference"}) {
+    const CLI::Option* option = cmd->get_option(swept);
+    std::erase_if(o->base.option_fields, [option](const auto& field) { return field.first == option; });
+    cmd->remove_option(cmd->get_option(swept));
+  }
   cmd->add_option("--d-tot", o->d_tot, "d_tot values (m)")->delimiter(',')->capture_default_str();
   cmd->add_option("--d-loc", o->d_loc, "d_loc values (m)")->delimiter(',')->capture_default_str();
   cmd->add_option("--false-threshold", o->false_threshold_m, "An inference farther than this from the truth is false (m)")
       ->capture_default_str();
   cmd->add_flag("--back-end", o->back_end,
-                "Map each cell as catgraph map does with its defaults (switchable, cascade, the rejected visual "
-                "closures vetoed and CAT-Graph+ re-run); also counts the false inferences the back end accepted");
+                "Map each cell as catgraph map does (the back end and hierarchy of the options, the rejected "
+                "visual closures vetoed and CAT-Graph+ re-run); also counts the false inferences the back end "
+                "accepted");
   cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();

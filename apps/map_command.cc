@@ -41,10 +41,7 @@ using mapping::kDefaultFeedbackReruns;
 namespace {
 
 struct MapCommandOptions {
-  LocalizeCommandOptions front;
-  std::string method = "switchable";
-  std::string hierarchy = "cascade";
-  PoseGraphOptimizerOptions optimizer;
+  LocalizeCommandOptions front;  // every library option in front.pipeline
   FalseMatchOptions injection;  // its seed is the filter's
   int feedback_reruns = kDefaultFeedbackReruns;
 };
@@ -111,25 +108,25 @@ std::string HtmlEscape(const std::string& text) {
 }
 
 void RunMap(MapCommandOptions& o, std::ostream& out) {
-  PoseGraphOptimizerOptions optimizer = o.optimizer;
-  optimizer.method = *RobustMethodFromString(o.method);
-  const HierarchyOptions hierarchy_options = HierarchyOptionsFor(o.hierarchy, optimizer);
-  Validate(optimizer);
+  ValidateOptions(o.front);
+  const PoseGraphOptimizerOptions& optimizer = o.front.pipeline.back_end;
+  const HierarchyOptions& hierarchy_options = o.front.pipeline.hierarchy;
+  const std::string method(ToString(optimizer.method)), hierarchy(ToString(hierarchy_options.policy));
   OutputDirectory output = OpenOutputDirectory(o.front, "map");
   const Dataset d = ReadDataset(o.front.dataset);
   const std::filesystem::path& dir = output.path();
-  o.injection.seed = o.front.localization.filter.seed;
-  o.front.localization.false_matches = PlanFalseVisualMatches(d, o.front.localization.filter, o.injection);
+  o.injection.seed = o.front.pipeline.front_end.filter.seed;
+  o.front.pipeline.front_end.false_matches = PlanFalseVisualMatches(d, o.front.pipeline.front_end.filter, o.injection);
 
-  out << "[1/3] front end: CAT-Graph" << (o.front.localization.filter.odometric_inference ? "+" : "") << " on "
+  out << "[1/3] front end: CAT-Graph" << (o.front.pipeline.front_end.filter.inference.enabled ? "+" : "") << " on "
       << d.frames.size() << " frames";
   if (o.injection.count > 0) out << ", " << o.injection.count << " false visual matches injected";
   out << "\n";
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
-  LocalizationResult first = Localize(d, inputs.observations, *inputs.model, o.front.localization);
-  PrintLocalizationSummary(d, first, o.front.localization.filter.odometric_inference, out);
+  LocalizationResult first = Localize(d, inputs.observations, *inputs.model, o.front.pipeline.front_end);
+  PrintLocalizationSummary(d, first, o.front.pipeline.front_end.filter.inference.enabled, out);
 
-  out << "[2/3] back end: " << o.method << " with the " << o.hierarchy << " hierarchy on "
+  out << "[2/3] back end: " << method << " with the " << hierarchy << " hierarchy on "
       << first.graph.vertices.size() << " poses and " << first.closures.size() << " closures\n";
   const Trajectory2 truth = TruthAtFrames(d);
   const MappingResult fed = SolveWithFeedback(d, inputs.observations, *inputs.model, std::move(first), optimizer,
@@ -146,7 +143,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
         << m.by_kind.at(ClosureKind::kOdometryInferred).count << " inferred closures (were "
         << fed.first.by_kind.at(ClosureKind::kOdometryInferred).count << ")\n";
   }
-  WriteLocalization(dir, d, r, o.front.localization.filter.closure_threshold);
+  WriteLocalization(dir, d, r, o.front.pipeline.front_end.filter.closure_threshold);
   const HierarchicalOptimization& solved = m.solved;
   const PoseGraphOptimization& result = solved.optimization;
   const PoseGraph2& corrected = std::get<PoseGraph2>(result.graph);
@@ -219,10 +216,10 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   };
   nlohmann::ordered_json report{{"dataset", o.front.dataset},
                                 {"frames", d.frames.size()},
-                                {"method", o.method},
-                                {"hierarchy", o.hierarchy},
+                                {"method", method},
+                                {"hierarchy", hierarchy},
                                 {"observation", ObservationJson(r.observation)},
-                                {"odometric_inference", o.front.localization.filter.odometric_inference},
+                                {"odometric_inference", o.front.pipeline.front_end.filter.inference.enabled},
                                 {"solves", solved.solves},
                                 {"time_s", solved.time_s},
                                 {"iterations", result.summary.iterations},
@@ -237,7 +234,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
                                 {"feedback", {{"reruns", fed.reruns}, {"vetoed_frames", vetoed_frames}}}};
   if (o.injection.count > 0) {
     nlohmann::ordered_json matches = nlohmann::ordered_json::array();
-    for (const FalseVisualMatch& f : o.front.localization.false_matches) {
+    for (const FalseVisualMatch& f : o.front.pipeline.front_end.false_matches) {
       matches.push_back({{"first_frame", f.first_frame},
                          {"last_frame", f.last_frame},
                          {"matched_first_frame", f.matched_first_frame},
@@ -260,6 +257,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   }
   report["closures"] = closures;
   WriteFileAtomically(dir / "report.json", [&](std::ostream& f) { f << report.dump(1) << '\n'; });
+  WriteOptions(dir, o.front);
 
   const plot::Figure map = MapFigure(d, r.graph, corrected, truth);
   plot::SaveFigure(map, dir / "map.png");
@@ -297,6 +295,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     file("groundtruth.tum", "the ground truth at the same times: evo_ape tum groundtruth.tum trajectory.tum -a");
   }
   file("report.json", "the numbers above and every closure");
+  file("options.yaml", "every option of this run (catgraph map --options options.yaml runs it again)");
   file("closures.json", "the front end's closures");
   file("hypotheses.csv", "the front end's hypothesis per frame");
   file("graph.g2o", "the front end's graph, before the back end");
@@ -305,8 +304,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
     f << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>catgraph map: "
       << HtmlEscape(o.front.dataset) << "</title>\n<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
       << "img{max-width:100%}td{padding:2px 12px}body,td{font-size:16px}</style></head><body>\n<h1>catgraph map</h1>\n<p>"
-      << HtmlEscape(o.front.dataset) << ": " << d.frames.size() << " frames; " << HtmlEscape(o.method)
-      << " back end, " << HtmlEscape(o.hierarchy) << " hierarchy.</p>\n<table>\n" << headline.str() << "</table>\n"
+      << HtmlEscape(o.front.dataset) << ": " << d.frames.size() << " frames; " << HtmlEscape(method)
+      << " back end, " << HtmlEscape(hierarchy) << " hierarchy.</p>\n<table>\n" << headline.str() << "</table>\n"
       << "<h2>Map (Fig. 10)</h2>\n<img src=\"map.svg\" alt=\"odometry alone and the corrected map\">\n"
       << "<h2>Hypothesis and closure error per frame (Figs. 7, 8, 11)</h2>\n"
       << "<img src=\"localization.svg\" alt=\"hypothesis and closure error per frame\">\n"
@@ -321,7 +320,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   output.Commit();
   out << "wrote " << o.front.output
       << ": corrected.g2o, corrected_accepted.g2o, trajectory.tum" << (truth.empty() ? "" : ", groundtruth.tum")
-      << ", report.json, map.png/svg, "
+      << ", report.json, options.yaml, map.png/svg, "
          "localization.png/svg, index.html\n";
 }
 
@@ -335,26 +334,35 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       "closure hierarchy, corrected graph (g2o, TUM), report.json, figures and index.html. docs/mapping.md.");
   cmd->add_option("dataset", o->front.dataset, "Dataset directory")->required();
   cmd->add_option("-o,--output", o->front.output, "Output directory")->required();
-  cmd->add_option("--hierarchy", o->hierarchy,
-                  "cascade: turn off the children of rejected visual closures and re-solve; coupled: scale each "
-                  "child by its parents' switches in one solve; flat: plain switchable constraints")
+  AddLocalizationOptions(*cmd, o->front, {"--observation", "--vocabulary", "--seed", "--no-odometric-inference"});
+  mapping::MapperOptions& pipeline = o->front.pipeline;
+  cmd->add_option_function<std::string>(
+         "--hierarchy",
+         [&pipeline](const std::string& name) { pipeline.hierarchy.policy = *HierarchyPolicyFromString(name); },
+         "cascade: turn off the children of rejected visual closures and re-solve; coupled: scale each child by "
+         "its parents' switches in one solve; flat: plain switchable constraints")
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
-      ->capture_default_str();
-  cmd->add_option("--method", o->method, "Robust method for loop closures (as catgraph optimize)")
+      ->default_str(std::string(ToString(pipeline.hierarchy.policy)));
+  cmd->add_option_function<std::string>(
+         "--method", [&pipeline](const std::string& name) { pipeline.back_end.method = *RobustMethodFromString(name); },
+         "Robust method for loop closures (as catgraph optimize)")
       ->check(CLI::IsMember(RobustMethodNames()))
-      ->capture_default_str();
-  AddLocalizationOptions(*cmd, o->front);
+      ->default_str(std::string(ToString(pipeline.back_end.method)));
   cmd->add_option("--inject-false-visual", o->injection.count,
                   "Make the visual filter report N false matches (pairs of consistent false visual closures "
                   "around a stretch of path; drawn by --seed; needs ground truth). docs/mapping.md")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   AddFalseMatchOptions(*cmd, o->injection);
+  for (const char* shape : {"--false-stretch", "--false-min-error", "--false-max-error"}) {
+    cmd->get_option(shape)->group(kUnlistedGroup);
+  }
   cmd->add_option("--feedback-reruns", o->feedback_reruns,
                   "cascade and coupled: re-run CAT-Graph+ with the visual closures the back end rejected vetoed, "
                   "and solve again, at most this many times (0: off). docs/mapping.md")
       ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(kUnlistedGroup);
   cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();

@@ -192,18 +192,18 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_flag("--json", o->json,
                 "Print one JSON object (iterations, initial_cost, final_cost, chi2, time_s, "
                 "accepted, rejected, ...)");
-  cmd->add_option("--switch-gate", o->optimizer.switch_gate_probability,
+  cmd->add_option("--switch-gate", o->optimizer.gate.probability,
                   "Every method: a closure is rejected when its chi2 (chordal cost) exceeds "
                   "the chi2(dof) quantile (the chordal cost's) at this probability (sets each "
                   "switch prior and the losses' scales; no per-dataset tuning)")
       ->capture_default_str();
-  cmd->add_flag("--no-noise-scale{false}", o->optimizer.estimate_noise_scale,
+  cmd->add_flag("--no-noise-scale{false}", o->optimizer.gate.estimate_noise_scale,
                 "Keep the gate where the file's information puts it, even when short cycles "
                 "of the graph show its noise to be three times or more what that information states");
-  cmd->add_flag("--no-narrow-gate{false}", o->optimizer.narrow_gate,
+  cmd->add_flag("--no-narrow-gate{false}", o->optimizer.gate.narrow,
                 "Keep the first robust solve's decisions, even when the accepted closures' "
                 "short cycles show Gaussian noise far below what their information states");
-  cmd->add_flag("--no-readmit{false}", o->optimizer.readmit,
+  cmd->add_flag("--no-readmit{false}", o->optimizer.readmission.enabled,
                 "Keep every closure the robust solve rejected out, even when its innovation "
                 "against the refined map (the map's uncertainty counted) passes the family-wise gate");
   cmd->add_option("--switch-prior-information", o->optimizer.switch_prior_information,
@@ -220,10 +220,10 @@ void AddOptimizeCommand(CLI::App& app, std::ostream& out) {
       ->capture_default_str();
   cmd->add_flag("--robust-odometry", o->optimizer.robust_odometry,
                 "Apply the robust method to odometry too");
-  cmd->add_flag("--no-settled-stop{false}", o->optimizer.stop_when_settled,
+  cmd->add_flag("--no-settled-stop{false}", o->optimizer.refinement.stop_when_settled,
                 "Run the robust solve to the solver's tolerances, even though the refinement "
                 "re-solves its map once its decisions have settled");
-  cmd->add_flag("--no-refine{false}", o->optimizer.refine,
+  cmd->add_flag("--no-refine{false}", o->optimizer.refinement.enabled,
                 "Keep the robust solve's poses instead of re-solving them with the rejected "
                 "closures removed and the accepted ones at full weight");
   cmd->add_option("--max-iterations", o->optimizer.solver.max_iterations,

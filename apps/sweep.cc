@@ -156,9 +156,9 @@ SweepConfig ParseConfig(const nlohmann::json& j, const std::filesystem::path& ba
   }
   c.optimizer.solver.max_iterations =
       static_cast<int>(IntegerIn(j, "max_iterations", c.optimizer.solver.max_iterations, 0, 1'000'000));
-  c.optimizer.switch_gate_probability =
-      j.value("switch_gate_probability", c.optimizer.switch_gate_probability);
-  c.optimizer.refine = j.value("refine", c.optimizer.refine);
+  c.optimizer.gate.probability =
+      j.value("switch_gate_probability", c.optimizer.gate.probability);
+  c.optimizer.refinement.enabled = j.value("refine", c.optimizer.refinement.enabled);
   if (j.contains("output")) c.output = path_of(j.at("output").get<std::string>());
   Validate(c.optimizer);
   for (OutlierPolicy p : c.policies) Validate(OutlierOptionsFor(c, p, 0, 1));

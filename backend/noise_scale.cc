@@ -20,10 +20,15 @@
 namespace catgraph {
 
 void Validate(const NoiseScaleOptions& o) {
-  if (o.window < 1 || o.max_cycles < 1 || o.min_cycles < 1 || !(o.quantile > 0.0 && o.quantile < 1.0) ||
-      !(o.upper_quantile > o.quantile && o.upper_quantile < 1.0)) {
-    throw std::invalid_argument("NoiseScaleOptions: a field is out of range");
-  }
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("NoiseScaleOptions: ") + what);
+  };
+  require(o.window >= 1, "noise_scale.window must be >= 1");
+  require(o.max_cycles >= 1, "noise_scale.max_cycles must be >= 1");
+  require(o.min_cycles >= 1, "noise_scale.min_cycles must be >= 1");
+  require(o.quantile > 0.0 && o.quantile < 1.0, "noise_scale.quantile must be in (0, 1)");
+  require(o.upper_quantile > o.quantile && o.upper_quantile < 1.0,
+          "noise_scale.upper_quantile must be in (quantile, 1)");
 }
 
 namespace {

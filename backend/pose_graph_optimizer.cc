@@ -106,9 +106,9 @@ bool DecidesAtGate(const PoseGraphOptimizerOptions& o) {
   return false;
 }
 
-// Whether the gate may be narrowed (PoseGraphOptimizerOptions::narrow_gate).
+// Whether the gate may be narrowed (GateOptions::narrow).
 bool NarrowsGate(const PoseGraphOptimizerOptions& o) {
-  return o.estimate_noise_scale && o.narrow_gate && DecidesAtGate(o);
+  return o.gate.estimate_noise_scale && o.gate.narrow && DecidesAtGate(o);
 }
 
 // The normalised innovation squared of each closure in `tested` against the
@@ -301,12 +301,12 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   const bool switchable = options.method == RobustMethod::kSwitchable;
   NoiseScaleEstimate noise_scale;
   double gate_factor = 1.0;
-  if (options.estimate_noise_scale && options.method != RobustMethod::kNone) {
-    noise_scale = EstimateNoiseScale(graph, options.noise_scale);
-    if (noise_scale.scale >= options.noise_scale_threshold) gate_factor = noise_scale.scale;
+  if (options.gate.estimate_noise_scale && options.method != RobustMethod::kNone) {
+    noise_scale = EstimateNoiseScale(graph, options.gate.noise_scale);
+    if (noise_scale.scale >= options.gate.noise_scale_threshold) gate_factor = noise_scale.scale;
     end_stage("noise_scale", 0);
   }
-  const double gate = gate_factor * Gate<PoseT>(options.cost, options.switch_gate_probability);
+  const double gate = gate_factor * Gate<PoseT>(options.cost, options.gate.probability);
   RobustLoss loss = LossFor(options, gate);
   auto robust = [&](const Constraint<PoseT>& c) {
     return options.robust_odometry || c.kind != ClosureKind::kOdometry;
@@ -400,7 +400,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       if (!disabled_switches.contains(id) && !frozen_switches.contains(id)) s.value = values.AtSwitch(id);
     }
   };
-  // The robust solve's stop test (PoseGraphOptimizerOptions::stop_when_settled),
+  // The robust solve's stop test (RefinementOptions::stop_when_settled),
   // set below where the decisions are defined.
   std::function<bool(const Values&, double)> settled;
 
@@ -443,8 +443,8 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     take_solution(solved.values);
     if (solved.summary.stopped_by_test) {
       std::ostringstream message;
-      message << "decisions settled: none changed over the last " << options.settled_iterations
-              << " iterations, and the last lowered the cost by less than " << options.settled_decrease
+      message << "decisions settled: none changed over the last " << options.refinement.settled_iterations
+              << " iterations, and the last lowered the cost by less than " << options.refinement.settled_decrease
               << " (relative); the refinement re-solves the map";
       solved.summary.message = message.str();
     }
@@ -507,7 +507,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
 
   // Each solve runs its own copy of the test, which starts with no history.
   const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
-  if (options.stop_when_settled && options.refine && robust_solve && options.method != RobustMethod::kGnc) {
+  if (options.refinement.stop_when_settled && options.refinement.enabled && robust_solve && options.method != RobustMethod::kGnc) {
     settled = [&, last = std::vector<bool>{}, unchanged = 0](const Values& values,
                                                             double decrease) mutable {
       take_solution(values);
@@ -515,7 +515,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       for (const ClosureDecision& d : decide_all(nullptr)) accepted.push_back(d.accepted);
       unchanged = accepted == last ? unchanged + 1 : 0;
       last = std::move(accepted);
-      return unchanged >= options.settled_iterations && decrease < options.settled_decrease;
+      return unchanged >= options.refinement.settled_iterations && decrease < options.refinement.settled_decrease;
     };
   }
 
@@ -523,7 +523,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   out.closures = decide_all(nullptr);
   end_stage("robust_solve", out.summary.iterations);
 
-  // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the accepted
+  // Narrowing (GateOptions::narrow): the accepted
   // closures' own cycles measure the noise again; when it is Gaussian and
   // the information overstates it, they are decided again at the calibrated
   // family-wise gate, from the first solve's poses, the rejected ones held
@@ -531,16 +531,16 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
   if (NarrowsGate(options) && method_decides_any && out.summary.IsUsable()) {
     const std::set<ClosureId> rejected = RejectedIds(out.closures);
     const std::size_t tested = out.closures.size() - rejected.size();
-    out.inlier_noise_scale = EstimateNoiseScale(graph, options.noise_scale, rejected);
+    out.inlier_noise_scale = EstimateNoiseScale(graph, options.gate.noise_scale, rejected);
     const NoiseScaleEstimate& inliers = out.inlier_noise_scale;
     const double narrowed =
         tested == 0 ? gate
                     : inliers.upper_scale *
-                          Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
+                          Gate<PoseT>(options.cost, 1.0 - (1.0 - options.gate.probability) /
                                                               static_cast<double>(tested));
-    if (inliers.cycles >= options.narrow_min_cycles &&
-        inliers.upper_scale <= options.narrow_max_tail_ratio * inliers.scale &&
-        narrowed * options.noise_scale_threshold <= gate) {
+    if (inliers.cycles >= options.gate.narrow_min_cycles &&
+        inliers.upper_scale <= options.gate.narrow_max_tail_ratio * inliers.scale &&
+        narrowed * options.gate.noise_scale_threshold <= gate) {
       const auto first_vertices = graph.vertices;
       const auto first_switches = graph.switches;
       for (const ClosureId id : rejected) {
@@ -562,7 +562,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
       }
       if (out.narrowed->IsUsable() &&
           static_cast<double>(out.narrow_newly_rejected) <=
-              options.narrow_max_rejected_share * static_cast<double>(tested)) {
+              options.gate.narrow_max_rejected_share * static_cast<double>(tested)) {
         out.narrow_factor = narrowed / gate;
         out.closures = std::move(second);
       } else {
@@ -619,7 +619,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     summary.SetTimes(times);
     return summary;
   };
-  if (options.refine && robust_solve && out.summary.IsUsable()) {
+  if (options.refinement.enabled && robust_solve && out.summary.IsUsable()) {
     // With nothing rejected, the robust solve ran from the initial guess
     // with every closure near full weight, the refinement's own problem: a
     // second start from the initial guess ends where the first does.
@@ -627,12 +627,12 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     end_stage("refine", out.refinement->iterations);
   }
 
-  // Readmission (PoseGraphOptimizerOptions::readmit): each closure the
+  // Readmission (ReadmissionOptions): each closure the
   // method rejected is tested once more against the refined map, by its
   // innovation (the map's own uncertainty counted) at the family-wise gate;
   // those that pass are accepted and the map refined again, and the rest
   // tested against that map, until none passes (at most kReadmitRounds).
-  if (options.readmit && DecidesAtGate(options) && options.cost == RelativePoseCostType::kG2o &&
+  if (options.readmission.enabled && DecidesAtGate(options) && options.cost == RelativePoseCostType::kG2o &&
       !out.narrowed && out.refinement && out.refinement->IsUsable()) {
     constexpr int kReadmitRounds = 3;
     std::map<ClosureId, const Constraint<PoseT>*> constraint_of;
@@ -646,7 +646,7 @@ PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOption
     const auto decided = std::count_if(out.closures.begin(), out.closures.end(), by_method);
     const double family_gate =
         decided == 0 ? 0.0
-                     : gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.switch_gate_probability) /
+                     : gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.gate.probability) /
                                                                       static_cast<double>(decided));
     // Rejected by its own weight, with every coupled switch on.
     auto rejected_by_itself = [&](const ClosureDecision& d) {
@@ -766,18 +766,18 @@ void Validate(const PoseGraphOptimizerOptions& o) {
     throw std::invalid_argument("gnc_max_rounds must be >= 1, got " +
                                 std::to_string(o.gnc_max_rounds));
   }
-  if (!(o.switch_gate_probability > 0.0 && o.switch_gate_probability < 1.0)) {
-    throw std::invalid_argument("switch_gate_probability must be in (0, 1)");
+  if (!(o.gate.probability > 0.0 && o.gate.probability < 1.0)) {
+    throw std::invalid_argument("gate.probability must be in (0, 1)");
   }
-  if (!(o.noise_scale_threshold > 1.0)) throw std::invalid_argument("noise_scale_threshold must be > 1");
-  if (!(o.narrow_max_tail_ratio >= 1.0)) throw std::invalid_argument("narrow_max_tail_ratio must be >= 1");
-  if (o.narrow_min_cycles < 1) throw std::invalid_argument("narrow_min_cycles must be >= 1");
-  if (!(o.narrow_max_rejected_share > 0.0 && o.narrow_max_rejected_share <= 1.0)) {
-    throw std::invalid_argument("narrow_max_rejected_share must be in (0, 1]");
+  if (!(o.gate.noise_scale_threshold > 1.0)) throw std::invalid_argument("gate.noise_scale_threshold must be > 1");
+  if (!(o.gate.narrow_max_tail_ratio >= 1.0)) throw std::invalid_argument("gate.narrow_max_tail_ratio must be >= 1");
+  if (o.gate.narrow_min_cycles < 1) throw std::invalid_argument("gate.narrow_min_cycles must be >= 1");
+  if (!(o.gate.narrow_max_rejected_share > 0.0 && o.gate.narrow_max_rejected_share <= 1.0)) {
+    throw std::invalid_argument("gate.narrow_max_rejected_share must be in (0, 1]");
   }
-  Validate(o.noise_scale);
-  if (o.settled_iterations < 1) throw std::invalid_argument("settled_iterations must be >= 1");
-  if (!(o.settled_decrease > 0.0)) throw std::invalid_argument("settled_decrease must be > 0");
+  Validate(o.gate.noise_scale);
+  if (o.refinement.settled_iterations < 1) throw std::invalid_argument("refinement.settled_iterations must be >= 1");
+  if (!(o.refinement.settled_decrease > 0.0)) throw std::invalid_argument("refinement.settled_decrease must be > 0");
   if (!(o.dcs_phi >= 0.0)) throw std::invalid_argument("dcs_phi must be >= 0 (0: from the gate)");
   if (!(o.loss_scale_sigma >= 0.0)) {
     throw std::invalid_argument("loss_scale_sigma must be >= 0 (0: from the gate)");

@@ -52,25 +52,21 @@ enum class InitialGuess {
 std::string_view ToString(InitialGuess guess);
 std::optional<InitialGuess> InitialGuessFromString(std::string_view text);
 
-struct PoseGraphOptimizerOptions {
-  RobustMethod method = RobustMethod::kSwitchable;
-  InitialGuess initial_guess = InitialGuess::kAuto;
-  // The objective; kChordal is SE-Sync's F (with switches: Psi(s)^2 times
-  // each closure's chordal cost).
-  RelativePoseCostType cost = RelativePoseCostType::kG2o;
-  SwitchFunction switch_function = SwitchFunction::kLinear;
+// The chi2 gate every method decides at, scaled by the noise the graph
+// shows, and narrowed after the robust solve (docs/backend.md).
+struct GateOptions {
   // The default needs no per-dataset tuning. For one closure with
   // chi2 = e^T Omega e, the switchable objective s^2 chi2 + xi (1 - s)^2 is
   // least at s = xi / (xi + chi2), so s > 0.5 exactly when chi2 < xi: the
   // switch-prior information xi is a chi2 gate. Measured in each closure's
   // own information, it is the same for every dataset: xi is set to the
-  // chi2(dof) quantile at `switch_gate_probability` (2D: 16.27, 3D: 22.46).
+  // chi2(dof) quantile at `probability` (2D: 16.27, 3D: 22.46).
   // With the chordal cost, chi2 is the closure's chordal cost and the gate
   // its quantile under the closure's own noise (ChordalCostQuantile: 2D
   // 24.58, 3D 68.48).
   // A fixed xi = 1 (Vertigo's) instead rejects a true closure whenever its
   // error exceeds one sigma overall (docs/backend.md).
-  double switch_gate_probability = 0.999;  // (0, 1)
+  double probability = 0.999;  // (0, 1)
   // The gate assumes the information is right (or conservative). When short
   // cycles of the graph show its noise to be at least
   // `noise_scale_threshold` times the variance its information states
@@ -82,7 +78,8 @@ struct PoseGraphOptimizerOptions {
   double noise_scale_threshold = 3.0;  // > 1
   NoiseScaleOptions noise_scale;
   // The other way: a file whose information states more noise than its
-  // measurements carry lets false closures near the truth pass the gate. After the robust solve the short cycles of the accepted closures
+  // measurements carry lets false closures near the truth pass the gate. After
+  // the robust solve the short cycles of the accepted closures
   // alone measure the noise again (the rejected ones belong to no cycle).
   // When at least `narrow_min_cycles` of them show Gaussian noise of one
   // variance (the scale at NoiseScaleOptions' upper quantile at most
@@ -91,9 +88,9 @@ struct PoseGraphOptimizerOptions {
   // at most the gate over `noise_scale_threshold`, the accepted closures are
   // decided again, from the solve's poses, with the rejected ones held off as
   // they are. The calibrated gate is the upper scale times the quantile at
-  // 1 - (1 - switch_gate_probability) / n for the n closures tested: in the
+  // 1 - (1 - probability) / n for the n closures tested: in the
   // noise's own units, and family-wise, so that with probability
-  // switch_gate_probability no true closure among them is rejected. Needs
+  // `probability` no true closure among them is rejected. Needs
   // `estimate_noise_scale` and a method deciding at the gate (no explicit
   // switch prior, Phi or loss scale).
   // The second solve starts from the first one's map, which the false
@@ -102,10 +99,61 @@ struct PoseGraphOptimizerOptions {
   // rejects more than `narrow_max_rejected_share` of the closures the first
   // accepted (the calibrated gate expects none of them but the false ones),
   // the first solve's result stands.
-  bool narrow_gate = true;
+  bool narrow = true;
   double narrow_max_tail_ratio = 1.25;     // >= 1
   int narrow_min_cycles = 100;             // >= 1
   double narrow_max_rejected_share = 0.1;  // (0, 1]
+};
+
+// The refinement after a robust solve (docs/backend.md).
+struct RefinementOptions {
+  // After a robust solve (any method but none, or a file with switches), keep
+  // its decisions and re-solve the poses by plain least squares without the
+  // rejected closures and with the accepted ones at full weight: a rejected
+  // closure keeps a weight of up to 0.5 in the robust solve, and many of
+  // them together bend the map (docs/backend.md).
+  bool enabled = true;
+  // When enabled, the robust solve's map is replaced, and only its
+  // decisions are kept: it ends as soon as they have settled, that is when
+  // no decision has changed over the last `settled_iterations` iterations
+  // that lowered the cost and the last of them lowered it by less than
+  // `settled_decrease` (relative), instead of polishing a map the
+  // refinement re-solves. Not for GNC, whose rounds have their own schedule.
+  // Off: false.
+  bool stop_when_settled = true;
+  int settled_iterations = 2;      // >= 1
+  double settled_decrease = 1e-4;  // > 0
+};
+
+// The test of the rejected closures after the refinement (docs/backend.md).
+struct ReadmissionOptions {
+  // The gate decides each closure by its own chi2, on a map
+  // that false closures may still bend, and at a per-closure level: of n
+  // true closures it rejects n (1 - probability) on average,
+  // and more where the noise has heavier tails than one Gaussian (SE-Sync's
+  // manhattan: 22 of 1954). So after the refinement every closure the
+  // method rejected by its own weight is tested once more, on the refined
+  // map (the odometry and the accepted closures): by its innovation r^T (I +
+  // J Sigma J^T)^-1 r (whitened residual r, Jacobian J, the map's joint
+  // covariance Sigma of the closure's poses), which counts the map's own
+  // uncertainty as a closure's chi2 does not, at the family-wise gate: the
+  // gate's factor times the quantile at 1 - (1 - probability) /
+  // n for the n closures the method decided. A closure that passes is
+  // accepted (`readmitted`, weight and switch 1), and the map refined again
+  // with it. Needs the refinement, the g2o cost and a method deciding at the gate;
+  // not after a narrowed solve, whose gate is already family-wise in the
+  // noise's own units. Off: false.
+  bool enabled = true;
+};
+
+struct PoseGraphOptimizerOptions {
+  RobustMethod method = RobustMethod::kSwitchable;
+  InitialGuess initial_guess = InitialGuess::kAuto;
+  // The objective; kChordal is SE-Sync's F (with switches: Psi(s)^2 times
+  // each closure's chordal cost).
+  RelativePoseCostType cost = RelativePoseCostType::kG2o;
+  SwitchFunction switch_function = SwitchFunction::kLinear;
+  GateOptions gate;
   // Xi^-1 given explicitly (> 0) overrides the gate; 0 = use the gate.
   double switch_prior_information = 0.0;
   // DCS: Phi, the chi2 beyond which a closure is down-weighted; > 0, or 0
@@ -133,39 +181,8 @@ struct PoseGraphOptimizerOptions {
   // Closures held off (the closure hierarchy's `cascade` policy): left out of
   // the solve, reported rejected with weight 0, their switches (if any) at 0.
   std::set<ClosureId> disabled_closures;
-  // After a robust solve (any method but none, or a file with switches), keep
-  // its decisions and re-solve the poses by plain least squares without the
-  // rejected closures and with the accepted ones at full weight: a rejected
-  // closure keeps a weight of up to 0.5 in the robust solve, and many of
-  // them together bend the map (docs/backend.md).
-  bool refine = true;
-  // With `refine`, the robust solve's map is replaced, and only its
-  // decisions are kept: it ends as soon as they have settled, that is when
-  // no decision has changed over the last `settled_iterations` iterations
-  // that lowered the cost and the last of them lowered it by less than
-  // `settled_decrease` (relative), instead of polishing a map the
-  // refinement re-solves. Not for GNC, whose rounds have their own schedule.
-  // Off: false.
-  bool stop_when_settled = true;
-  int settled_iterations = 2;      // >= 1
-  double settled_decrease = 1e-4;  // > 0
-  // Readmission. The gate decides each closure by its own chi2, on a map
-  // that false closures may still bend, and at a per-closure level: of n
-  // true closures it rejects n (1 - switch_gate_probability) on average,
-  // and more where the noise has heavier tails than one Gaussian (SE-Sync's
-  // manhattan: 22 of 1954). So after the refinement every closure the
-  // method rejected by its own weight is tested once more, on the refined
-  // map (the odometry and the accepted closures): by its innovation r^T (I +
-  // J Sigma J^T)^-1 r (whitened residual r, Jacobian J, the map's joint
-  // covariance Sigma of the closure's poses), which counts the map's own
-  // uncertainty as a closure's chi2 does not, at the family-wise gate: the
-  // gate's factor times the quantile at 1 - (1 - switch_gate_probability) /
-  // n for the n closures the method decided. A closure that passes is
-  // accepted (`readmitted`, weight and switch 1), and the map refined again
-  // with it. Needs `refine`, the g2o cost and a method deciding at the gate;
-  // not after a narrowed solve, whose gate is already family-wise in the
-  // noise's own units. Off: false.
-  bool readmit = true;
+  RefinementOptions refinement;
+  ReadmissionOptions readmission;
   OptimizerOptions solver;
 };
 
@@ -195,7 +212,7 @@ struct ClosureDecision {
   // closure; true for a readmitted one.
   bool accepted = true;
   // Rejected by the robust solve, accepted by the innovation test
-  // (PoseGraphOptimizerOptions::readmit); its weight is then 1.
+  // (PoseGraphOptimizerOptions::readmission); its weight is then 1.
   bool readmitted = false;
 };
 
@@ -226,7 +243,7 @@ struct PoseGraphOptimization {
   NoiseScaleEstimate noise_scale;
   double gate_factor = 1.0;
   Summary summary;  // the robust solve
-  // Narrowing (PoseGraphOptimizerOptions::narrow_gate): the noise measured on
+  // Narrowing (GateOptions::narrow): the noise measured on
   // the accepted closures' cycles (cycles 0 when not measured), the
   // calibrated gate over the first (1 when it did not run or its result was
   // not kept), the second robust solve, when it ran, and how many closures
@@ -237,10 +254,10 @@ struct PoseGraphOptimization {
   double narrow_factor = 1.0;
   std::optional<Summary> narrowed;
   std::size_t narrow_newly_rejected = 0;
-  // The refinement solve, when it ran (PoseGraphOptimizerOptions::refine).
+  // The refinement solve, when it ran (RefinementOptions).
   // If it failed, `graph` holds the robust solve's poses.
   std::optional<Summary> refinement;
-  // Readmission (PoseGraphOptimizerOptions::readmit): how many closures it
+  // Readmission (PoseGraphOptimizerOptions::readmission): how many closures it
   // accepted, the seconds its test took, and the refinement with them, when
   // it ran. If that failed, the first refinement and its decisions stand.
   std::size_t readmitted = 0;

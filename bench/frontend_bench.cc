@@ -113,9 +113,9 @@ void BM_FilterStep(benchmark::State& state) {
   const int extra_laps = static_cast<int>(state.range(0));
   CatGraphOptions options;  // n_p = 1000, Table I
   const int odometric_copies = static_cast<int>(state.range(1));
-  options.odometric_inference = odometric_copies > 0;  // CAT-Graph+ beside it
-  if (odometric_copies == 1) options.odometric_seed_local = false;  // O as the spec's copy of V
-  if (odometric_copies > 0) options.odometric_particle_factor = odometric_copies;
+  options.inference.enabled = odometric_copies > 0;  // CAT-Graph+ beside it
+  if (odometric_copies == 1) options.inference.seed_local = false;  // O as the spec's copy of V
+  if (odometric_copies > 0) options.inference.particle_factor = odometric_copies;
   std::unique_ptr<CatGraphFilter> filter;
   std::size_t k = f.change.frames.size();
   int frame = 0;

@@ -17,11 +17,6 @@
 namespace catgraph {
 namespace {
 
-constexpr NameTable<NewPlaceMotion, 2> kNewPlaceMotionNames = {{
-    {NewPlaceMotion::kFilterNoise, "noise"},
-    {NewPlaceMotion::kOdometrySpread, "spread"},
-}};
-
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
 double LogSumExp(double a, double b) {
@@ -70,41 +65,66 @@ void Validate(const CatGraphOptions& o) {
     fail("num_particles must be from 1 to " + std::to_string(kMaxParticles));
   }
   if (!(o.closure_threshold > 0.0 && o.closure_threshold <= 1.0)) fail("closure_threshold must be in (0, 1]");
-  if (!(o.closure_min_evidence >= 0.0 && o.closure_min_evidence <= 1.0)) fail("closure_min_evidence must be in [0, 1]");
   if (!(o.hypothesis_radius_m > 0.0)) fail("hypothesis_radius_m must be > 0");
   if (!IsValidSigma(o.motion_sigma)) fail("motion_sigma must be finite and > 0");
-  if (o.new_place_motion_sigma && !IsValidSigma(*o.new_place_motion_sigma)) {
-    fail("new_place_motion_sigma must be finite and > 0");
-  }
-  if (o.odometric_motion_sigma && !IsValidSigma(*o.odometric_motion_sigma)) {
-    fail("odometric_motion_sigma must be finite and > 0");
-  }
   if (!(o.ess_threshold > 0.0 && o.ess_threshold <= 1.0)) fail("ess_threshold must be in (0, 1]");
   if (!(o.new_place_prior > 0.0 && o.new_place_prior < 1.0)) fail("new_place_prior must be in (0, 1)");
-  if (!(o.leave_probability > 0.0 && o.leave_probability < 1.0)) fail("leave_probability must be in (0, 1)");
-  if (o.new_place_log_offset && !std::isfinite(*o.new_place_log_offset)) fail("new_place_log_offset must be finite");
-  if (!(o.new_place_stay_fraction >= 0.0 && o.new_place_stay_fraction <= 1.0)) {
-    fail("new_place_stay_fraction must be in [0, 1]");
-  }
-  if (!(o.new_place_relative_offset >= 0.0 && o.new_place_relative_offset < 1.0)) {
-    fail("new_place_relative_offset must be in [0, 1)");
-  }
-  if (!(o.new_place_stay_relative_offset >= 0.0 && o.new_place_stay_relative_offset < 1.0)) {
-    fail("new_place_stay_relative_offset must be in [0, 1)");
-  }
-  if (!(o.exclusion_window_s >= 0.0 && o.exclusion_window_m >= 0.0)) fail("exclusion windows must be >= 0");
-  if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
-  if (!(o.observation_window_m >= 0.0 && std::isfinite(o.observation_window_m))) {
-    fail("observation_window_m must be finite and >= 0");
-  }
+  if (!(o.exclusion_window_s >= 0.0)) fail("exclusion_window_s must be >= 0");
+  if (!(o.exclusion_window_m >= 0.0)) fail("exclusion_window_m must be >= 0");
   if (!(o.sequence_break_s > 0.0)) fail("sequence_break_s must be > 0");
-  if (!(o.local_validation_m > 0.0 && o.total_validation_m > 0.0)) fail("d_loc and d_tot must be > 0");
-  if (!(o.odometric_particle_factor >= 1 && o.odometric_particle_factor <= 100)) {
-    fail("odometric_particle_factor must be in [1, 100]");
-  }
-  if (!(o.total_path_retries >= 0 && o.total_path_retries <= 100)) fail("total_path_retries must be in [0, 100]");
+  if (!(o.motion_radius_m > 0.0)) fail("motion_radius_m must be > 0");
   if (o.hypothesis_candidate_edges < 1) fail("hypothesis_candidate_edges must be >= 1");
-  if (!(o.odometric_gate_base_m >= 0.0 && o.odometric_gate_fraction >= 0.0)) fail("odometric gate must be >= 0");
+
+  const RecognitionOptions& r = o.recognition;
+  if (!(r.closure_min_evidence >= 0.0 && r.closure_min_evidence <= 1.0)) {
+    fail("recognition.closure_min_evidence must be in [0, 1]");
+  }
+  if (!(r.observation_window_m >= 0.0 && std::isfinite(r.observation_window_m))) {
+    fail("recognition.observation_window_m must be finite and >= 0");
+  }
+
+  const NewPlaceOptions& n = o.new_place;
+  if (n.log_offset && !std::isfinite(*n.log_offset)) fail("new_place.log_offset must be finite");
+  if (!(n.leave_probability > 0.0 && n.leave_probability < 1.0)) fail("new_place.leave_probability must be in (0, 1)");
+  if (!(n.stay_fraction >= 0.0 && n.stay_fraction <= 1.0)) fail("new_place.stay_fraction must be in [0, 1]");
+  if (!(n.stay_relative_offset >= 0.0 && n.stay_relative_offset < 1.0)) {
+    fail("new_place.stay_relative_offset must be in [0, 1)");
+  }
+  if (n.motion_sigma && !IsValidSigma(*n.motion_sigma)) fail("new_place.motion_sigma must be finite and > 0");
+
+  if (!(o.gate.base_m >= 0.0 && o.gate.fraction >= 0.0)) fail("gate.base_m and gate.fraction must be >= 0");
+
+  const InferenceOptions& i = o.inference;
+  if (!(i.local_validation_m > 0.0)) fail("inference.local_validation_m (d_loc) must be > 0");
+  if (!(i.total_validation_m > 0.0)) fail("inference.total_validation_m (d_tot) must be > 0");
+  if (!(i.total_path_retries >= 0 && i.total_path_retries <= 100)) {
+    fail("inference.total_path_retries must be in [0, 100]");
+  }
+  if (!(i.particle_factor >= 1 && i.particle_factor <= 100)) fail("inference.particle_factor must be in [1, 100]");
+  if (i.motion_sigma && !IsValidSigma(*i.motion_sigma)) fail("inference.motion_sigma must be finite and > 0");
+}
+
+CatGraphOptions CatGraphOptions::Paper() {
+  CatGraphOptions o;
+  o.motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
+  o.recognition = {.closure_min_evidence = 0.0, .forward_camera = false, .observation_window_m = 0.0};
+  // One prior for new place whether or not the robot is on the map, and one
+  // likelihood: Eq 6 as written, weighed by Q.
+  o.new_place = {.log_offset = 0.0,
+                 .leave_probability = o.new_place_prior,
+                 .stay_fraction = 1.0,
+                 .stay_relative_offset = 0.0,
+                 .hold_after_closure = false,
+                 .motion_sigma = std::nullopt};
+  o.gate.enabled = false;
+  o.inference = {.enabled = true,
+                 .local_validation_m = 2.0,
+                 .total_validation_m = 1.0,
+                 .total_path_retries = 0,
+                 .seed_local = false,
+                 .particle_factor = 1,
+                 .motion_sigma = std::nullopt};
+  return o;
 }
 
 CatGraphFilter::CatGraphFilter(const ObservationModel& model, CatGraphOptions options)
@@ -140,29 +160,19 @@ double PositionLogLikelihood(const Pose2& start, const Pose2& y, const Pose2& x,
 }
 
 double NewPlaceMotionLogLikelihood(const Eigen::Vector3d& u, const Eigen::Vector3d& mean,
-                                   const Eigen::Vector3d& spread, const Eigen::Vector3d& noise_sigma,
-                                   NewPlaceMotion model) {
-  const Eigen::Vector3d sigma =
-      model == NewPlaceMotion::kOdometrySpread ? noise_sigma.cwiseMax(spread) : noise_sigma;
+                                   const Eigen::Vector3d& sigma) {
   return -0.5 * (u - mean).cwiseQuotient(sigma).squaredNorm();
 }
 
-std::string_view ToString(NewPlaceMotion model) { return NameOf(kNewPlaceMotionNames, model); }
-
-std::optional<NewPlaceMotion> NewPlaceMotionFromString(std::string_view text) {
-  return ValueOf(kNewPlaceMotionNames, text);
-}
-
-std::vector<std::string> NewPlaceMotionNames() { return NamesOf(kNewPlaceMotionNames); }
 
 double OdometricGateRadius(const CatGraphOptions& options, double path_since_m) {
-  if (!options.odometric_gate) return std::numeric_limits<double>::infinity();
-  return options.odometric_gate_base_m + options.odometric_gate_fraction * path_since_m;
+  if (!options.gate.enabled) return std::numeric_limits<double>::infinity();
+  return options.gate.base_m + options.gate.fraction * path_since_m;
 }
 
 bool CatGraphFilter::Eligible(int node) const {
   if (node >= eligible_below_) return false;
-  if (!options_.odometric_gate) return true;
+  if (!options_.gate.enabled) return true;
   const GraphNode& n = graph_.node(node);
   const double gate = OdometricGateRadius(options_, path_length_m_ - n.path_length_m);
   return (odometry_pose_.translation() - n.odometry_pose.translation()).squaredNorm() <= gate * gate;
@@ -413,12 +423,12 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   };
   // Eq 2's node likelihood: the node's own, or the mean over the eligible
   // nodes within the observation window along the path.
-  if (options_.observation_window_m > 0.0) {
+  if (options_.recognition.observation_window_m > 0.0) {
     window_ll_.resize(graph_.nodes().size());
     window_ll_step_.resize(graph_.nodes().size(), 0);
   }
   auto node_ll = [&](int n) {
-    if (options_.observation_window_m == 0.0) return own_ll(n);
+    if (options_.recognition.observation_window_m == 0.0) return own_ll(n);
     const auto i = static_cast<std::size_t>(n);
     if (window_ll_step_[i] != steps_) {
       window_ll_step_[i] = steps_;
@@ -429,7 +439,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
         for (int m = n + step_dir; m >= 0 && m < static_cast<int>(graph_.nodes().size()); m += step_dir) {
           const GraphNode& node = graph_.node(m);
           if (std::abs(node.time_s - graph_.node(m - step_dir).time_s) > options_.sequence_break_s ||
-              std::abs(node.path_length_m - centre.path_length_m) > options_.observation_window_m) {
+              std::abs(node.path_length_m - centre.path_length_m) > options_.recognition.observation_window_m) {
             break;
           }
           if (!Eligible(m)) continue;
@@ -455,18 +465,17 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // many words and scores little at the true place only.
   const double self_evidence = likelihood->SelfEvidence();
   step.self_evidence = self_evidence;
-  const double offset = options_.new_place_log_offset.value_or(model_.NewPlaceLogOffset()) +
-                        options_.new_place_relative_offset * self_evidence;
+  const double offset = options_.new_place.log_offset.value_or(model_.NewPlaceLogOffset());
   // The mass that holds the robot on the map: all of it, or under
   // hold_after_closure none until the cloud has closed since it came on.
-  const double held = options_.hold_after_closure && !closed_since_entry_ ? 0.0 : mapped_mass_;
-  const double h = options_.leave_probability;
+  const double held = options_.new_place.hold_after_closure && !closed_since_entry_ ? 0.0 : mapped_mass_;
+  const double h = options_.new_place.leave_probability;
   const double prior_new = held * h + (1.0 - held) * options_.new_place_prior;
   double stay_credit = 0.0;
   if (held >= 0.5) {
-    stay_credit = (1.0 - options_.new_place_stay_fraction) * offset;
-    if (options_.new_place_stay_relative_offset > 0.0) {
-      stay_credit = std::max(0.0, stay_credit - options_.new_place_stay_relative_offset * self_evidence);
+    stay_credit = (1.0 - options_.new_place.stay_fraction) * offset;
+    if (options_.new_place.stay_relative_offset > 0.0) {
+      stay_credit = std::max(0.0, stay_credit - options_.new_place.stay_relative_offset * self_evidence);
     }
   }
   const double log_keep =
@@ -483,7 +492,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
     // nodes never saw: such a particle is weighed as an unremarkable place,
     // by the model's unseen place (FAB-MAP's mean field; without the new-place offset)
     // [D, docs/frontend.md].
-    const bool reversed = options_.forward_camera && p.direction < 0;
+    const bool reversed = options_.recognition.forward_camera && p.direction < 0;
     const double log_observation =
         reversed ? likelihood->LogUnseenPlaceLikelihood()
                  : LogSumExp(p.alpha < 1.0 ? std::log(1.0 - p.alpha) + node_ll(e.from) : kNegInf,
@@ -496,14 +505,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // New place (Eq 6): mean-field FAB-MAP and the odometry against its mean.
   double log_new = std::log(prior_new) + likelihood->LogNewPlaceLikelihood() + offset;
   if (!restart) {
-    // Welford's running mean and spread of the odometry.
+    // The odometry's running mean.
     ++u_count_;
-    const Eigen::Vector3d delta = u.ToVector() - u_mean_;
-    u_mean_ += delta / u_count_;
-    u_m2_ += delta.cwiseProduct(u.ToVector() - u_mean_);
-    log_new += NewPlaceMotionLogLikelihood(u.ToVector(), u_mean_, (u_m2_ / u_count_).cwiseSqrt(),
-                                           options_.new_place_motion_sigma.value_or(options_.motion_sigma),
-                                           options_.new_place_motion);
+    u_mean_ += (u.ToVector() - u_mean_) / u_count_;
+    log_new += NewPlaceMotionLogLikelihood(u.ToVector(), u_mean_,
+                                           options_.new_place.motion_sigma.value_or(options_.motion_sigma));
   }
   double log_total = log_new;
   for (const Particle& p : particles_) log_total = LogSumExp(log_total, p.log_weight);
@@ -538,11 +544,11 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   // A forward camera facing against the matched nodes saw none of what they
   // saw: its particles carry no visual evidence (the mean field above), only
   // the odometry's, and their hypothesis is no visual closure.
-  const bool seen = !(options_.forward_camera && step.best.direction < 0);
+  const bool seen = !(options_.recognition.forward_camera && step.best.direction < 0);
   // Nor is a cloud that scores little on what the camera sees (NaN, no
   // particle on the map, fails too).
   const bool recognised =
-      options_.closure_min_evidence == 0.0 || step.log_evidence >= options_.closure_min_evidence * self_evidence;
+      options_.recognition.closure_min_evidence == 0.0 || step.log_evidence >= options_.recognition.closure_min_evidence * self_evidence;
   const bool confident = step.best.edge >= 0 && step.best.value > options_.closure_threshold && seen && recognised;
   if (aliasing.false_match >= 0 || (confident && !aliasing.withhold_closure)) {
     step.closure = true;
@@ -574,7 +580,7 @@ CatGraphStep CatGraphFilter::Step(int frame, double time_s, const Pose2& u, cons
   } else {
     for (Particle& p : particles_) p.log_weight -= std::log(sum);  // normalised among particles
   }
-  if (options_.odometric_inference) OdometricStep(restart ? Pose2() : u, step.closure && !aliasing.vetoed, step);
+  if (options_.inference.enabled) OdometricStep(restart ? Pose2() : u, step.closure && !aliasing.vetoed, step);
   return step;
 }
 
@@ -598,7 +604,7 @@ void CatGraphFilter::ReinitialiseOdometric(const LocationHypothesis& match) {
   // particles near; should none lie within d_h, O is the spec's copy of V.
   std::vector<Particle>& seeds = odometric_seeds_;
   seeds.clear();
-  if (options_.odometric_seed_local) {
+  if (options_.inference.seed_local) {
     const GraphEdge& e = graph_.edge(match.edge);
     builder_.Build(graph_, e.from, options_.hypothesis_radius_m + e.length_m + 1e-6, eligible_, local_);
     if (const std::optional<Pose2> centre = local_.PointPose(match.edge, match.alpha)) {
@@ -612,7 +618,7 @@ void CatGraphFilter::ReinitialiseOdometric(const LocationHypothesis& match) {
     }
   }
   if (seeds.empty()) seeds = particles_;  // the spec's copy of V
-  const int factor = options_.odometric_particle_factor;
+  const int factor = options_.inference.particle_factor;
   double log_total = kNegInf;  // each copy weighs w / (factor × the seeds' total)
   for (const Particle& p : seeds) log_total = LogSumExp(log_total, p.log_weight);
   log_total += std::log(static_cast<double>(factor));
@@ -637,14 +643,14 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
       double distance = std::numeric_limits<double>::infinity();
       if (odometric.edge >= 0) {
         const GraphEdge& e = graph_.edge(step.best.edge);
-        builder_.Build(graph_, e.from, options_.total_validation_m + e.length_m + 1e-6, eligible_, local_);
+        builder_.Build(graph_, e.from, options_.inference.total_validation_m + e.length_m + 1e-6, eligible_, local_);
         const auto a = local_.PointPose(step.best.edge, step.best.alpha);
         const auto b = HypothesisPose(odometric);
         if (a && b) distance = (a->translation() - (*b * u).translation()).norm();
       }
-      if (distance < options_.total_validation_m || total_path_failures_ == options_.total_path_retries) {
+      if (distance < options_.inference.total_validation_m || total_path_failures_ == options_.inference.total_path_retries) {
         step.reference_node = reference_node_;
-        (distance < options_.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
+        (distance < options_.inference.total_validation_m ? step.inferred : step.discarded) = std::move(pending_);
         pending_.clear();
       } else {
         ++total_path_failures_;  // carried past this closure, as past a vetoed one
@@ -663,7 +669,7 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
 
   // The odometric filter: same motion and projection, position-only weights
   // (Eq 8), resampled without new places; Q its own if set.
-  MotionAndProjection(odometric_, u, options_.odometric_motion_sigma.value_or(options_.motion_sigma), odometric_rng_);
+  MotionAndProjection(odometric_, u, options_.inference.motion_sigma.value_or(options_.motion_sigma), odometric_rng_);
   double log_total = kNegInf;
   for (const Particle& p : odometric_) log_total = LogSumExp(log_total, p.log_weight);
   if (log_total == kNegInf) {  // every particle left the graph: nothing to infer until the next closure
@@ -698,13 +704,13 @@ void CatGraphFilter::OdometricStep(const Pose2& u, bool closure, CatGraphStep& s
   // odometric gate: the gate is about where the robot may be now, and the
   // reference lies behind it.
   const GraphEdge& e = graph_.edge(reference_location_.edge);
-  const double radius = T_since_reference_.translation().norm() + options_.local_validation_m + e.length_m;
+  const double radius = T_since_reference_.translation().norm() + options_.inference.local_validation_m + e.length_m;
   builder_.Build(graph_, e.from, radius, [this](int n) { return n < eligible_below_; }, local_);
   const auto from = HypothesisPose(reference_location_);
   const auto to = HypothesisPose(step.odometric_best);
   if (!from || !to) return;
   const Pose2 y = from->Between(*to);
-  if ((y.translation() - T_since_reference_.translation()).norm() >= options_.local_validation_m) return;
+  if ((y.translation() - T_since_reference_.translation()).norm() >= options_.inference.local_validation_m) return;
   step.inference_pending = true;
   InferredClosure c;
   c.node = step.node;

@@ -45,18 +45,6 @@
 
 namespace catgraph {
 
-// How new place (Eq 6) weighs a frame's odometry u_k against the mean
-// odometry [R, spec §6.3; docs/frontend.md "New place and the odometry"].
-enum class NewPlaceMotion {
-  // Σ_u = Q, the spec's reading: a turn costs new place as much as it costs
-  // a particle on a straight edge, so a turn the map does not make never
-  // takes the robot off the map.
-  kFilterNoise,
-  // Σ_u = the odometry's own spread so far, per component and at least Q: a
-  // new place may turn as the robot does anywhere.
-  kOdometrySpread,
-};
-
 // log P(x_k | y_k, Q) of Eq 1 up to a constant: the projected pose x (path
 // heading, turned by π for a particle facing against the path) against the
 // propagated pose y, in the frame of the particle's pose at the start of
@@ -66,153 +54,158 @@ enum class NewPlaceMotion {
 double PositionLogLikelihood(const Pose2& start, const Pose2& y, const Pose2& x, const Eigen::Vector3d& sigma,
                              bool with_heading);
 
-// log p(u | u_avg) of Eq 6 up to a constant: -1/2 sum(((u - mean) / sigma)^2)
-// with sigma = noise_sigma (Q's), or per component the larger of noise_sigma
-// and `spread` (the odometry's standard deviation) for kOdometrySpread.
+// log p(u | u_avg) of Eq 6 up to a constant: -1/2 sum(((u - mean) / sigma)^2).
 double NewPlaceMotionLogLikelihood(const Eigen::Vector3d& u, const Eigen::Vector3d& mean,
-                                   const Eigen::Vector3d& spread, const Eigen::Vector3d& noise_sigma,
-                                   NewPlaceMotion model);
-std::string_view ToString(NewPlaceMotion model);
-std::optional<NewPlaceMotion> NewPlaceMotionFromString(std::string_view text);  // "noise", "spread"
-std::vector<std::string> NewPlaceMotionNames();
+                                   const Eigen::Vector3d& sigma);
 
 // The most particles a filter takes: memory grows by about 100 bytes per
 // particle and the time per frame linearly (docs/cli.md "Limits").
 inline constexpr int kMaxParticles = 100'000;
 
-// The CAT-Graph+ paper's Table I as defaults.
-struct CatGraphOptions {
-  int num_particles = 1000;                // n_p; 1 to kMaxParticles
-  double closure_threshold = 0.8;          // T_h on Eq 4; (0, 1]
+// What counts as the camera recognising a place [D, docs/frontend.md].
+struct RecognitionOptions {
   // A visual closure also needs the frame's evidence (CatGraphStep's
   // log_evidence: how much better the particles explain it than the mean
   // field) to be at least this fraction of its self-evidence (what a node
-  // with exactly its words would score) [D, docs/frontend.md "Closing on
-  // what the camera sees"]: a cloud that the odometry holds together
-  // through a changed place is still no recognition. [0, 1]; 0: Eq 4 and
-  // T_h alone (the spec).
+  // with exactly its words would score) ("Closing on what the camera
+  // sees"): a cloud that the odometry holds together through a changed
+  // place is still no recognition. [0, 1]; 0: Eq 4 and T_h alone (the spec).
   double closure_min_evidence = 0.2;
+  // The camera sees one way (the paper's forward patch), so particles facing
+  // against the nodes' headings get the model's unseen-place likelihood
+  // (FAB-MAP's mean field), not the nodes', and a hypothesis facing against
+  // them is no visual closure: the camera cannot have recognised what it
+  // did not see. False for a panoramic camera (spec Eq 2 as written).
+  bool forward_camera = true;
+  // Eq 2 over a stretch of path ("What stays and what changes"): a node's
+  // likelihood is the mean of those of the eligible nodes within this many
+  // metres of path on either side of it (none across a sequence break). A
+  // camera on a line beside the map's sees a corner's walls as the map saw
+  // them a little earlier or later, and the images pull the particles that
+  // far along the path; within the window they do not, and the odometry
+  // holds the cloud. >= 0; 0: the node's own (the spec).
+  double observation_window_m = 0.4;
+};
+
+// The new-place hypothesis of Eq 6 and what entering, staying on and leaving
+// the map cost [D, docs/frontend.md].
+struct NewPlaceOptions {
+  // Added to log p(z | new place), in the observation model's nats. Unset:
+  // the model's own (ObservationModel::NewPlaceLogOffset: FAB-MAP's 45, none
+  // for the calibrated holistic model); 0 is the spec as written. Finite
+  // when set.
+  std::optional<double> log_offset;
+  // Prior mass of new place while the robot was localised on the map (the
+  // chance of leaving it in one frame), in place of p_new; (0, 1). Small, so
+  // that one weak frame does not take the robot off the map: ln((1 - h) / h)
+  // = 46 nats for 1e-20, against which the frames score what the stay
+  // offset below leaves them ("Leaving the map", "Staying on the map").
+  double leave_probability = 1e-20;
+  // What staying on the map costs, as a fraction of what entering it costs
+  // ("Staying on the map"): the offset is charged in full against the map's
+  // mass entering from a new place, and, once the robot is on the map (at
+  // least half the mass there last frame), only this fraction of it against
+  // the mass carried on. [0, 1]; 1: one offset for both.
+  double stay_fraction = 0.2;
+  // And staying costs this fraction of the frame's self-evidence more (at
+  // most what entering costs): in 99 % of the unchanged office frames the
+  // true place scores a fifth of the frame's self-evidence or more, in most
+  // changed ones under a tenth. [0, 1); 0: the stay fraction alone.
+  double stay_relative_offset = 0.08;
+  // Whether the robot is held on the map (the leave probability in place of
+  // p_new, and the stay credit) only once the cloud has made a visual
+  // closure since it came onto the map ("Held after a closure"). A cloud
+  // that came on without beating the offset (new place charged for a turn
+  // by Eq 6, say) then still has to beat new place frame by frame until it
+  // closes, and the new place's reseeding can find the true place
+  // meanwhile. A vetoed closure (Aliasing::vetoed) releases the hold.
+  // False: any mass on the map holds it.
+  bool hold_after_closure = true;
+  // Eq 6's σ: how much a new place is charged for odometry unlike the mean
+  // ("Corners and Q"). The default is the odometry's own noise (Q's σ
+  // before its heading σ was widened for corners): a turn the map does not
+  // make still costs new place what it did. Unset: Q's σ (motion_sigma),
+  // the spec's reading (§6.3). Finite and > 0 when set.
+  std::optional<Eigen::Vector3d> motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
+};
+
+// The odometric gate [D, docs/frontend.md "The odometric gate"]: a node is
+// not eligible while dead reckoning puts it farther from the robot than
+// base + fraction × the path driven since it, i.e. while odometry alone
+// rules out being there.
+struct OdometricGateOptions {
+  bool enabled = true;
+  double base_m = 1.0;    // >= 0
+  double fraction = 0.1;  // of the path since the node; >= 0
+};
+
+// CAT-Graph+ (spec §3; the paper's Table II): an odometry-only particle
+// filter beside the visual one infers closures between visual closures
+// (docs/catgraph-plus.md).
+struct InferenceOptions {
+  bool enabled = true;
+  double local_validation_m = 2.0;  // d_loc; > 0
+  double total_validation_m = 1.0;  // d_tot; > 0
+  // How many visual closures in a row the pending inferences may fail
+  // total-path validation against and still be carried on, O with them, to
+  // the next one [D, "A chain against a false closure"]. A failure says that
+  // the chain or the closure is wrong, not which; a false visual closure
+  // (perceptual aliasing) otherwise discards the true chain it meets, and
+  // the closures it brings then start a false one. A closure a chain is
+  // carried past neither validates, discards nor re-initialises O (as a
+  // vetoed one). [0, 100]; 0: the spec.
+  int total_path_retries = 4;
+  // How O is re-initialised at a visual closure (spec §3.5 copies V) [D,
+  // "O's along-track wander"]. O has no observation: its cloud's centre
+  // walks along the track with each resampling, by chance, less so the more
+  // particles it holds; and a particle of V far from the match (a new-place
+  // draw) that moves with the odometry is as good as the main cloud, and
+  // can grow into a second mode. So O takes only V's particles within d_h
+  // of the match (false: all of V, the spec), each copied this many times
+  // at 1/factor of its weight (1: the spec); [1, 100].
+  bool seed_local = true;
+  int particle_factor = 5;
+  // O's Q, σ per frame (m, m, rad): O only needs Q to cover how the odometry
+  // of the two traversals differs, which can be less than what the visual
+  // filter needs. Unset: motion_sigma (the spec: the same propagation as
+  // V). Finite and > 0 when set. V never depends on it.
+  std::optional<Eigen::Vector3d> motion_sigma;
+};
+
+// The filter's options. The top level holds the paper's Table I and the
+// spec's parameters; the nested structs hold what catgraph adds, each
+// marked [D] (a departure from the spec, with the reason in docs/). Paper()
+// is the spec exactly; the defaults are catgraph's.
+struct CatGraphOptions {
+  int num_particles = 1000;                // n_p; 1 to kMaxParticles
+  double closure_threshold = 0.8;          // T_h on Eq 4; (0, 1]
   double hypothesis_radius_m = 1.0;        // d_h; > 0
   // Q = diag(σ)², per frame (m, m, rad); > 0. The heading's σ is wider than
-  // the odometry's own heading noise so that the cloud follows a corner the
-  // robot takes a little sooner or later than the map did [D, docs/frontend.md
+  // Table I's (0.005 rad) so that the cloud follows a corner the robot takes
+  // a little sooner or later than the map did [D, docs/frontend.md
   // "Corners and Q"].
   Eigen::Vector3d motion_sigma{0.05, 0.05, 0.02};
   double ess_threshold = 0.3;              // T_ess, a fraction of n_p; (0, 1]
   double new_place_prior = 0.5;            // p_new (spec §6.3) while in a new place; (0, 1)
-  // Prior mass of new place while the robot was localised on the map (the
-  // chance of leaving it in one frame) [D]; (0, 1). Small, so that one weak
-  // frame does not take the robot off the map: ln((1 - h) / h) = 46 nats
-  // for 1e-20, against which the frames score what the stay offset below
-  // leaves them (docs/frontend.md "Leaving the map", "Staying on the map").
-  double leave_probability = 1e-20;
-  // Added to log p(z | new place), in the observation model's nats [D,
-  // docs/frontend.md]. Unset: the model's own (ObservationModel::
-  // NewPlaceLogOffset: FAB-MAP's 45, none for the calibrated holistic model);
-  // 0 is the spec as written. Finite when set.
-  std::optional<double> new_place_log_offset;
-  // Added to the offset: this fraction of the frame's self-evidence, how much
-  // better than the mean field a node that saw exactly the frame's words
-  // would explain it [D, docs/frontend.md]. A frame with few words cannot
-  // score many nats anywhere, the true place included. [0, 1); 0: the
-  // constant offset alone.
-  double new_place_relative_offset = 0.0;
-  // What staying on the map costs, as a fraction of what entering it costs
-  // [D, docs/frontend.md "Staying on the map"]: the offset above (constant
-  // and relative parts) is charged in full against the map's mass entering
-  // from a new place, and, once the robot is on the map (at least half the
-  // mass there last frame), only this fraction of it against the mass
-  // carried on. [0, 1]; 1: one offset for both (as the offset was first
-  // introduced).
-  double new_place_stay_fraction = 0.2;
-  // And staying costs this fraction of the frame's self-evidence more (at
-  // most what entering costs) [D, docs/frontend.md "Staying on the map"]:
-  // in 99 % of the unchanged office frames the true place scores a fifth of
-  // the frame's self-evidence or more, in most changed ones under a tenth.
-  // [0, 1); 0: the stay fraction alone.
-  double new_place_stay_relative_offset = 0.08;
-  // Whether the robot is held on the map (the leave probability above in
-  // place of p_new, and the stay credit) only once the cloud has made a
-  // visual closure since it came onto the map [D, docs/frontend.md "Held
-  // after a closure"]. A cloud that came on without beating the offset (new
-  // place charged for a turn by Eq 6, say) then still has to beat new place
-  // frame by frame until it closes, and the new place's reseeding can find
-  // the true place meanwhile. A vetoed closure (Aliasing::vetoed) releases
-  // the hold. False: any mass on the map holds it.
-  bool hold_after_closure = true;
-  NewPlaceMotion new_place_motion = NewPlaceMotion::kFilterNoise;
-  // Eq 6's σ under both models (under `spread`, the floor under the
-  // odometry's spread) [D, docs/frontend.md "Corners and Q"]: how much a
-  // new place is charged for odometry unlike the mean. The default is the
-  // odometry's own noise (Q's σ before its heading σ was widened for
-  // corners): a turn the map does not make still costs new place what it
-  // did. Unset: Q's σ (motion_sigma), the spec's reading (§6.3). Finite and
-  // > 0 when set.
-  std::optional<Eigen::Vector3d> new_place_motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
   double exclusion_window_s = 10.0;        // nodes younger than this ...
-  double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible
-  // Odometric gate [D, docs/frontend.md]: a node is not eligible while dead
-  // reckoning puts it farther from the robot than base + fraction × the path
-  // driven since it, i.e. while odometry alone rules out being there.
-  bool odometric_gate = true;
-  double odometric_gate_base_m = 1.0;      // >= 0
-  double odometric_gate_fraction = 0.1;    // of the path since the node; >= 0
+  double exclusion_window_m = 5.0;         // ... or nearer along the path are not eligible; >= 0
+  bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
   // A gap between frames longer than this restarts the particles (the
   // traversals of a dataset recorded apart); > 0.
   double sequence_break_s = 5.0;
   double motion_radius_m = 0.5;            // local-graph radius for the motion update, at least
                                            // the frame's step + 4σ; > 0
   int hypothesis_candidate_edges = 64;     // Eq 4 is evaluated on the heaviest edges; >= 1
-  // The camera sees one way (the paper's forward patch), so particles facing
-  // against the nodes' headings get the model's unseen-place likelihood (FAB-MAP's mean field), not the
-  // nodes', and a hypothesis facing against them is no visual closure: the
-  // camera cannot have recognised what it did not see [D, docs/frontend.md].
-  // False for a panoramic camera (spec Eq 2 as written).
-  bool forward_camera = true;
-  // Eq 2 over a stretch of path [D, docs/frontend.md "What stays and what
-  // changes"]: a node's likelihood is the mean of those of the eligible
-  // nodes within this many metres of path on either side of it (none across
-  // a sequence break). A camera on a line beside the map's sees a corner's
-  // walls as the map saw them a little earlier or later, and the images pull
-  // the particles that far along the path; within the window they do not,
-  // and the odometry holds the cloud. >= 0; 0: the node's own (the spec).
-  double observation_window_m = 0.4;
-  bool heading_in_position_likelihood = true;  // Eq 1 with θ (spec §6.4: false = position only)
-
-  // CAT-Graph+ (spec §3; the paper's Table II): an odometry-only particle
-  // filter beside the visual one infers closures between visual closures.
-  bool odometric_inference = true;
-  double local_validation_m = 2.0;         // d_loc; > 0
-  double total_validation_m = 1.0;         // d_tot; > 0
-  // How many visual closures in a row the pending inferences may fail
-  // total-path validation against and still be carried on, O with them, to
-  // the next one [D, docs/catgraph-plus.md "A chain against a false
-  // closure"]. A failure says that the chain or the closure is wrong, not
-  // which; a false visual closure (perceptual aliasing) otherwise discards
-  // the true chain it meets, and the closures it brings then start a false
-  // one. A closure a chain is carried past neither validates, discards nor
-  // re-initialises O (as a vetoed one). [0, 100]; 0: the spec.
-  int total_path_retries = 4;
-  // How O is re-initialised at a visual closure (spec §3.5 copies V) [D,
-  // docs/frontend.md "The odometric filter's along-track spread"]. O has no
-  // observation: its cloud's centre walks along the track with each
-  // resampling, by chance, less so the more particles it holds; and a
-  // particle of V far from the match (a new-place draw) that moves with the
-  // odometry is as good as the main cloud, and can grow into a second mode.
-  // So O takes only V's particles within d_h of the match (false: all of V,
-  // the spec), each copied this many times at 1/factor of its weight
-  // (1: the spec); [1, 100].
-  bool odometric_seed_local = true;
-  int odometric_particle_factor = 5;
-  // The odometric filter's Q, σ per frame (m, m, rad) [D, docs/catgraph-plus.md
-  // "O's along-track wander"]: O has no observation, so each resampling
-  // moves its cloud along the path by about Q's along-track σ, and its
-  // hypothesis wanders. O only needs Q to cover how the odometry of the
-  // two traversals differs, which can be less than what the visual filter
-  // needs. Unset: motion_sigma (the spec: the same propagation as V).
-  // Finite and > 0 when set. V never depends on it.
-  std::optional<Eigen::Vector3d> odometric_motion_sigma;
   std::uint64_t seed = 1;
+
+  RecognitionOptions recognition;
+  NewPlaceOptions new_place;
+  OdometricGateOptions gate;
+  InferenceOptions inference;
+
+  // The spec exactly: Table I (Q's heading σ 0.005 rad), Eq 2 and Eq 6 as
+  // written, no gate, CAT-Graph+ as §3 has it.
+  static CatGraphOptions Paper();
 };
 
 // Throws std::invalid_argument naming the first field out of range.
@@ -371,7 +364,6 @@ class CatGraphFilter {
   double time_s_ = 0.0, path_length_m_ = 0.0;
   int u_count_ = 0;
   Eigen::Vector3d u_mean_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d u_m2_ = Eigen::Vector3d::Zero();  // sum of squared deviations
   int eligible_below_ = 0;                 // this step's EligibleBelow()
   Pose2 odometry_pose_;                    // dead reckoning of the current frame
   std::function<bool(int)> eligible_;      // Eligible() for the builder

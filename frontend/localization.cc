@@ -113,15 +113,27 @@ Eigen::Matrix3d InformationOf(const Eigen::Vector3d& sigma) {
 }
 
 const LocalizationOptions& Validated(const LocalizationOptions& options) {
-  const PoseGraphUncertainty& u = options.graph_uncertainty;
-  if (!(u.odometry_m_per_sqrt_m > 0.0 && u.odometry_rad_per_sqrt_m > 0.0 && u.min_distance_m > 0.0 &&
-        (u.closure_sigma.array() > 0.0).all())) {
-    throw std::invalid_argument("Localize: every PoseGraphUncertainty field must be > 0");
-  }
+  Validate(options);
   return options;
 }
 
 }  // namespace
+
+void Validate(const PoseGraphUncertainty& u) {
+  auto require = [](bool ok, const char* field) {
+    if (!ok) throw std::invalid_argument(std::string("PoseGraphUncertainty: ") + field + " must be finite and > 0");
+  };
+  require(std::isfinite(u.odometry_m_per_sqrt_m) && u.odometry_m_per_sqrt_m > 0.0, "odometry_m_per_sqrt_m");
+  require(std::isfinite(u.odometry_rad_per_sqrt_m) && u.odometry_rad_per_sqrt_m > 0.0, "odometry_rad_per_sqrt_m");
+  require(std::isfinite(u.min_distance_m) && u.min_distance_m > 0.0, "min_distance_m");
+  require(IsValidSigma(u.closure_sigma), "closure_sigma");
+}
+
+void Validate(const LocalizationOptions& options) {
+  Validate(options.filter);
+  Validate(options.graph_uncertainty);
+  if (options.threads < 0) throw std::invalid_argument("LocalizationOptions: threads must be >= 0");
+}
 
 Localizer::Localizer(const ObservationModel& model, LocalizationOptions options)
     : filter_(model, Validated(options).filter),
@@ -129,7 +141,7 @@ Localizer::Localizer(const ObservationModel& model, LocalizationOptions options)
   result_.options = std::move(options);
   result_.observation.model = model.Name();
   result_.observation.new_place_log_offset =
-      result_.options.filter.new_place_log_offset.value_or(model.NewPlaceLogOffset());
+      result_.options.filter.new_place.log_offset.value_or(model.NewPlaceLogOffset());
   if (const auto* holistic = dynamic_cast<const HolisticModel*>(&model)) {
     result_.observation.holistic = holistic->options();
     result_.observation.calibration = holistic->calibration();

@@ -95,6 +95,8 @@ struct PoseGraphUncertainty {
   // outweighs the odometry that contradicts it (docs/mapping.md).
   bool share_inferred_information = true;
 };
+// Throws std::invalid_argument naming the first field that is not > 0.
+void Validate(const PoseGraphUncertainty& uncertainty);
 
 struct LocalizationOptions {
   CatGraphOptions filter;
@@ -110,6 +112,9 @@ struct LocalizationOptions {
   // Called from the calling thread: stage is "features" or "filter".
   std::function<void(const char* stage, std::size_t done, std::size_t total)> on_progress;
 };
+// The filter's and the graph's options, and threads >= 0; throws
+// std::invalid_argument naming the first field out of range.
+void Validate(const LocalizationOptions& options);
 
 // The observation model a run used and what it was calibrated to.
 struct ObservationSummary {

@@ -140,13 +140,16 @@ std::vector<HierarchyDecision> PropagateRejections(const ClosureHierarchy& hiera
   }
 }
 
+void Validate(const HierarchyOptions& options) {
+  if (options.max_rounds < 1) {
+    throw std::invalid_argument("HierarchyOptions: max_rounds must be >= 1, got " + std::to_string(options.max_rounds));
+  }
+}
+
 HierarchicalOptimization OptimizeWithHierarchy(const AnyPoseGraph& graph, const ClosureHierarchy& hierarchy,
                                                const PoseGraphOptimizerOptions& options,
                                                const HierarchyOptions& hierarchy_options) {
-  if (hierarchy_options.max_rounds < 1) {
-    throw std::invalid_argument("HierarchyOptions::max_rounds must be >= 1, got " +
-                                std::to_string(hierarchy_options.max_rounds));
-  }
+  Validate(hierarchy_options);
   HierarchicalOptimization out;
   PoseGraphOptimizerOptions o = options;
   auto solve = [&] {

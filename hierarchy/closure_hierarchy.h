@@ -92,6 +92,8 @@ struct HierarchyOptions {
   HierarchyPolicy policy = HierarchyPolicy::kCascade;
   int max_rounds = 50;  // cascade: solves at most; >= 1
 };
+// Throws std::invalid_argument for a field out of range.
+void Validate(const HierarchyOptions& options);
 
 struct HierarchicalOptimization {
   // The last solve: every closure of the input with its final decision

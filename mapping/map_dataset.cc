@@ -79,7 +79,7 @@ MappingResult SolveWithFeedback(const Dataset& d, const std::vector<Observation>
   out.outcome = SolveMap(front, optimizer, hierarchy, truth);
   out.first = out.outcome;
   // Without CAT-Graph+ a veto changes nothing a re-run would compute.
-  const bool feedback = hierarchy.policy != HierarchyPolicy::kFlat && localization.filter.odometric_inference;
+  const bool feedback = hierarchy.policy != HierarchyPolicy::kFlat && localization.filter.inference.enabled;
   while (feedback && out.reruns < max_reruns) {
     bool vetoed_more = false;
     for (const LoopClosure& c : front.closures) {

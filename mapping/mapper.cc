@@ -10,25 +10,31 @@ namespace catgraph::mapping {
 PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& back_end, int max_iterations) {
   PoseGraphOptimizerOptions online = back_end;
   online.initial_guess = InitialGuess::kFile;
-  online.estimate_noise_scale = false;
-  online.narrow_gate = false;
-  online.refine = false;
-  online.readmit = false;
+  online.gate.estimate_noise_scale = false;
+  online.gate.narrow = false;
+  online.refinement.enabled = false;
+  online.readmission.enabled = false;
   online.solver.max_iterations = max_iterations;
   return online;
+}
+
+void Validate(const MapperOptions& options) {
+  Validate(options.front_end);
+  Validate(options.back_end);
+  Validate(options.hierarchy);
+  CheckHierarchyForFrontEnd(options.hierarchy, options.back_end);
+  if (options.online_max_iterations < 1) {
+    throw std::invalid_argument("MapperOptions: online_max_iterations (online.max_iterations) must be >= 1, not " +
+                                std::to_string(options.online_max_iterations));
+  }
 }
 
 Mapper::Mapper(const ObservationModel& model, MapperOptions options)
     : options_(std::move(options)),
       online_(OnlineSolveOptions(options_.back_end, options_.online_max_iterations)),
       localizer_(model, options_.front_end) {
-  if (options_.online_max_iterations < 1) {
-    throw std::invalid_argument("Mapper: online_max_iterations must be >= 1, not " +
-                                std::to_string(options_.online_max_iterations));
-  }
-  Validate(options_.back_end);
+  Validate(options_);
   Validate(online_);
-  CheckHierarchyForFrontEnd(options_.hierarchy, options_.back_end);
 }
 
 FrameResult Mapper::AddFrame(const FrameInput& frame, const Observation& z) {

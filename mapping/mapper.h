@@ -47,6 +47,10 @@ struct MapperOptions {
   // map's accuracy (docs/mapping.md).
   int online_max_iterations = 3;
 };
+// Every part (the libraries' Validate), and a hierarchy the front end's
+// graph can take (CheckHierarchyForFrontEnd); throws std::invalid_argument
+// naming the first field out of range.
+void Validate(const MapperOptions& options);
 
 // The back end's options for online solves: `back_end` from the last
 // solution (the file's guess), at most `max_iterations` iterations, the gate

@@ -437,11 +437,11 @@ void BindOptimizer(py::module_& m) {
         options.method = Parse(RobustMethodFromString(method), method, "method (none, switchable, dcs, cauchy, huber, gnc)");
         options.initial_guess =
             Parse(InitialGuessFromString(initial_guess), initial_guess, "initial guess (auto, file, spanning-tree, chordal)");
-        options.switch_gate_probability = switch_gate_probability;
-        options.refine = refine;
-        options.readmit = readmit && refine;
-        options.estimate_noise_scale = estimate_noise_scale;
-        options.narrow_gate = narrow_gate && estimate_noise_scale;
+        options.gate.probability = switch_gate_probability;
+        options.refinement.enabled = refine;
+        options.readmission.enabled = readmit && refine;
+        options.gate.estimate_noise_scale = estimate_noise_scale;
+        options.gate.narrow = narrow_gate && estimate_noise_scale;
         options.solver.num_threads = num_threads;
         py::gil_scoped_release release;
         return OptimizePoseGraph(graph.graph, options);
@@ -634,7 +634,7 @@ void BindFrontEnd(py::module_& m) {
       "localize",
       [](const Dataset& dataset, bool infer) {
         LocalizationOptions options;
-        options.filter.odometric_inference = infer;
+        options.filter.inference.enabled = infer;
         py::gil_scoped_release release;
         const HolisticFrontEnd front_end = PrepareHolistic(dataset, {}, options);
         return Localize(dataset, front_end.observations, *front_end.model, options);
@@ -703,7 +703,7 @@ void BindMapping(py::module_& m) {
              p.vocabulary = vocabulary;
              p.model = std::make_unique<FabMapModel>(vocabulary->tree(), FabMapOptions{});
              mapping::MapperOptions options;
-             options.front_end.filter.odometric_inference = odometric_inference;
+             options.front_end.filter.inference.enabled = odometric_inference;
              options.solve_online = solve_online;
              p.mapper = std::make_unique<mapping::Mapper>(*p.model, options);
              return p;

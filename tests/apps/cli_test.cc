@@ -517,6 +517,33 @@ TEST_CASE("localize refuses a stay fraction, a stay relative offset, an observat
   CHECK(ok.err.find("no-such-dataset") != std::string::npos);
 }
 
+TEST_CASE("localize and map list at most 15 options in --help; an options file's mistakes name its line",
+          "[apps][localize][map][options]") {
+  for (const char* command : {"localize", "map"}) {
+    const Result help = Run({command, "--help"});
+    REQUIRE(help.status == 0);
+    std::istringstream lines(help.out);
+    int options = 0;
+    for (std::string line; std::getline(lines, line);) options += line.starts_with("  -");
+    CAPTURE(command, help.out);
+    CHECK(options >= 10);
+    CHECK(options <= 15);
+    CHECK(help.out.find("--options") != std::string::npos);
+    CHECK(help.out.find("--gate-base") == std::string::npos);  // accepted, listed in docs/cli.md
+  }
+  const auto dir = testing::TempDir("cli_options");
+  std::ofstream(dir / "bad.yaml") << "front_end:\n  filter:\n    gate:\n      fraction: -0.5\n";
+  const Result bad = Run({"map", "no-such-dataset", "-o", (dir / "out").string(), "--options",
+                          (dir / "bad.yaml").string()});
+  CHECK(bad.status == 1);
+  CHECK(bad.err.find("bad.yaml:4: CatGraphOptions: gate.") != std::string::npos);
+  const Result preset = Run({"localize", "no-such-dataset", "-o", (dir / "out").string(), "--preset", "spec"});
+  CHECK(preset.status == 2);
+  CHECK(preset.err.find("--preset") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir / "out"));
+  std::filesystem::remove_all(dir);
+}
+
 // Sizes from flags have documented maxima, checked before anything is
 // allocated: the flag is named, nothing aborts.
 TEST_CASE("sizes beyond their documented maximum are refused by flag name", "[apps][bad-input][bounds]") {
@@ -549,12 +576,12 @@ TEST_CASE("localize holds after a closure by default; --no-hold-after-closure tu
     AddLocalizationOptions(app, o);
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses a reversed vector
     app.parse(reversed);
-    return o.localization.filter.hold_after_closure;
+    return o.pipeline.front_end.filter.new_place.hold_after_closure;
   };
   CHECK(parse({}));
   CHECK(parse({"--hold-after-closure"}));
   CHECK_FALSE(parse({"--no-hold-after-closure"}));
-  CHECK(CatGraphOptions{}.hold_after_closure);
+  CHECK(CatGraphOptions{}.new_place.hold_after_closure);
 }
 
 TEST_CASE("sweep runs a configuration, resumes, merges shards and plots", "[apps][sweep]") {
@@ -838,9 +865,9 @@ TEST_CASE("office-static: traversal 2 closes visually all but in full, none wron
   const auto root = testing::TempDir("office_static");
   LocalizeCommandOptions o;
   const auto [d, in] = SimulateAndPrepare("office-static", root, o);
-  const LocalizationResult plus = Localize(d, in.observations, *in.model, o.localization);
-  o.localization.filter.odometric_inference = false;
-  const LocalizationResult alone = Localize(d, in.observations, *in.model, o.localization);
+  const LocalizationResult plus = Localize(d, in.observations, *in.model, o.pipeline.front_end);
+  o.pipeline.front_end.filter.inference.enabled = false;
+  const LocalizationResult alone = Localize(d, in.observations, *in.model, o.pipeline.front_end);
 
   int second = 0, closed = 0;
   for (const LoopClosure& c : plus.closures) {
@@ -882,7 +909,7 @@ TEST_CASE("office-split: no wrong visual closure at the detour's corners and no 
   const auto root = testing::TempDir("office_split");
   LocalizeCommandOptions o;
   const auto [d, in] = SimulateAndPrepare("office-split", root, o);
-  const LocalizationResult result = Localize(d, in.observations, *in.model, o.localization);
+  const LocalizationResult result = Localize(d, in.observations, *in.model, o.pipeline.front_end);
   int visual = 0, inferred = 0;
   for (const LoopClosure& c : result.closures) {
     CAPTURE(c.frame, c.matched_frame, c.error_m);
@@ -1163,6 +1190,26 @@ TEST_CASE("every stage of the demo on a short office: no wrong visual closure, t
   CHECK(ate_corrected < 0.5 * ate_odometry);
   CheckNonTrivialImage(out / "map.png");
   CheckNonTrivialImage(out / "localization.png");
+
+  // The paper's filter exactly (--preset paper): a forward view down a
+  // corridor shares its far half with every place behind it, and with no
+  // offset, gate or recognition rule the spec's filter takes such places
+  // for revisits, which the defaults above never do. Its options.yaml runs
+  // it again, closure for closure.
+  const Result paper = Run({"localize", data.string(), "-o", (root / "paper").string(), "--preset", "paper", "--quiet"});
+  INFO(paper.out << paper.err);
+  REQUIRE(paper.status == 0);
+  int paper_wrong = 0;
+  std::ifstream paper_in(root / "paper" / "closures.json");
+  for (const auto& c : nlohmann::json::parse(paper_in)) {
+    if (c.at("kind") == "visual" && c.at("error_m").get<double>() > 1.0) ++paper_wrong;
+  }
+  CHECK(paper_wrong > 20);
+  const Result again = Run({"localize", data.string(), "-o", (root / "again").string(), "--options",
+                            (root / "paper" / "options.yaml").string(), "--quiet"});
+  REQUIRE(again.status == 0);
+  CHECK(testing::ReadText(root / "again" / "closures.json") == testing::ReadText(root / "paper" / "closures.json"));
+  CHECK(testing::ReadText(root / "again" / "options.yaml") == testing::ReadText(root / "paper" / "options.yaml"));
 
   const Result sad = Run({"sad-match", data.string(), "-o", (root / "sad").string()});
   INFO(sad.out << sad.err);

@@ -132,7 +132,7 @@ TEST_CASE("the gate widens by the measured noise scale on overconfident informat
 
   // The gate where the information puts it rejects a large share of them.
   PoseGraphOptimizerOptions fixed;
-  fixed.estimate_noise_scale = false;
+  fixed.gate.estimate_noise_scale = false;
   const PoseGraphOptimization kept = OptimizePoseGraph(graph, fixed);
   CHECK(kept.gate_factor == 1.0);
   CHECK(testing::CountInjected(kept, injected).true_rejected > counts.true_closures / 10);
@@ -152,8 +152,8 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
   for (const InjectedClosure& c : world.injected) injected.insert(c.id);
 
   PoseGraphOptimizerOptions first_only;
-  first_only.narrow_gate = false;
-  first_only.readmit = false;  // the first solve's decisions alone
+  first_only.gate.narrow = false;
+  first_only.readmission.enabled = false;  // the first solve's decisions alone
   const PoseGraphOptimization first = OptimizePoseGraph(graph, first_only);
   REQUIRE(first.summary.IsUsable());
   CHECK_FALSE(first.narrowed);
@@ -185,7 +185,7 @@ TEST_CASE("information that overstates Gaussian noise: the accepted closures' cy
   // what the first accepted is not kept (a first solve bent by many false
   // closures: docs/backend.md); here any share is too much.
   PoseGraphOptimizerOptions strict;
-  strict.narrow_max_rejected_share = 1e-9;
+  strict.gate.narrow_max_rejected_share = 1e-9;
   const PoseGraphOptimization guarded = OptimizePoseGraph(graph, strict);
   REQUIRE(guarded.narrowed);
   CHECK(guarded.narrow_newly_rejected == r.narrow_newly_rejected);
@@ -358,7 +358,7 @@ TEST_CASE("real front ends' heavier tails keep the first gate, and readmission k
     CHECK(r.readmitted == static_cast<std::size_t>(gated));
     REQUIRE(r.readmission);
     PoseGraphOptimizerOptions gate_only;
-    gate_only.readmit = false;
+    gate_only.readmission.enabled = false;
     const PoseGraphOptimization g = OptimizePoseGraph(graph, gate_only);
     CHECK(g.rejected == static_cast<std::size_t>(gated));
     CHECK(g.readmitted == 0);

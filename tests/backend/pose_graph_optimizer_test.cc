@@ -368,11 +368,11 @@ TEST_CASE("refinement gives the plain optimum of the graph without the rejected 
   for (RobustMethod method : {RobustMethod::kSwitchable, RobustMethod::kDcs}) {
     PoseGraphOptimizerOptions options;
     options.method = method;
-    options.readmit = false;  // the robust solve's decisions, refined
+    options.readmission.enabled = false;  // the robust solve's decisions, refined
     const PoseGraphOptimization refined = OptimizePoseGraph(sim.graph, options);
     REQUIRE(refined.refinement);
     REQUIRE(refined.refinement->IsUsable());
-    options.refine = false;
+    options.refinement.enabled = false;
     const PoseGraphOptimization raw = OptimizePoseGraph(sim.graph, options);
     CHECK(!raw.refinement);
     // The same decisions ...
@@ -403,7 +403,7 @@ TEST_CASE("the robust solve stops when its decisions settle, with the full solve
     PoseGraphOptimizerOptions options;
     options.method = method;
     const PoseGraphOptimization settled = OptimizePoseGraph(sim.graph, options);
-    options.stop_when_settled = false;
+    options.refinement.stop_when_settled = false;
     const PoseGraphOptimization full = OptimizePoseGraph(sim.graph, options);
     REQUIRE(settled.refinement);
     REQUIRE(full.refinement);
@@ -418,10 +418,10 @@ TEST_CASE("the robust solve stops when its decisions settle, with the full solve
     CHECK(LargestPositionDifference(settled.graph, full.graph) < 1e-5);
   }
   PoseGraphOptimizerOptions bad;
-  bad.settled_iterations = 0;
+  bad.refinement.settled_iterations = 0;
   CHECK_THROWS_AS(Validate(bad), std::invalid_argument);
   bad = {};
-  bad.settled_decrease = 0.0;
+  bad.refinement.settled_decrease = 0.0;
   CHECK_THROWS_AS(Validate(bad), std::invalid_argument);
 }
 
@@ -435,9 +435,9 @@ TEST_CASE("readmission brings back the true closures the gate rejected and no fa
     CAPTURE(ToString(method));
     PoseGraphOptimizerOptions options;
     options.method = method;
-    options.readmit = false;
+    options.readmission.enabled = false;
     const PoseGraphOptimization gated = OptimizePoseGraph(sim.graph, options);
-    options.readmit = true;
+    options.readmission.enabled = true;
     const PoseGraphOptimization r = OptimizePoseGraph(sim.graph, options);
     const testing::InjectedDecisions before = testing::CountInjected(gated, injected);
     const testing::InjectedDecisions after = testing::CountInjected(r, injected);
@@ -493,7 +493,7 @@ TEST_CASE("the solve reports the stages it ran, in order, with their iterations 
   };
 
   PoseGraphOptimizerOptions options;
-  options.narrow_gate = false;
+  options.gate.narrow = false;
   const PoseGraphOptimization r = OptimizePoseGraph(sim.graph, options);
   REQUIRE(r.refinement);
   CHECK(names(r) == std::vector<std::string>{"noise_scale", "initial_guess", "robust_solve", "refine",
@@ -611,11 +611,11 @@ TEST_CASE("with the default initial guess, switchable constraints keep every clo
   // reason kAuto is the default ...
   PoseGraphOptimizerOptions file;
   file.initial_guess = InitialGuess::kFile;
-  file.readmit = false;
+  file.readmission.enabled = false;
   const PoseGraphOptimization trapped = OptimizePoseGraph(mit, file);
   CHECK(trapped.rejected > 0);
   // ... from which readmission brings every closure back.
-  file.readmit = true;
+  file.readmission.enabled = true;
   const PoseGraphOptimization readmitted = OptimizePoseGraph(mit, file);
   CHECK(readmitted.rejected == 0);
   CHECK(readmitted.readmitted == trapped.rejected);

@@ -37,15 +37,15 @@ TrajectoryGraph Line(int nodes) {
 // (tests/simulation) run the defaults.
 CatGraphOptions RingOptions() {
   CatGraphOptions options;
-  options.closure_min_evidence = 0.0;
+  options.recognition.closure_min_evidence = 0.0;
   options.motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
-  options.new_place_motion_sigma.reset();
-  options.leave_probability = 1e-10;
-  options.new_place_stay_fraction = 1.0;
-  options.new_place_stay_relative_offset = 0.0;
-  options.hold_after_closure = false;
-  options.observation_window_m = 0.0;
-  options.total_path_retries = 0;
+  options.new_place.motion_sigma.reset();
+  options.new_place.leave_probability = 1e-10;
+  options.new_place.stay_fraction = 1.0;
+  options.new_place.stay_relative_offset = 0.0;
+  options.new_place.hold_after_closure = false;
+  options.recognition.observation_window_m = 0.0;
+  options.inference.total_path_retries = 0;
   return options;
 }
 
@@ -135,7 +135,7 @@ TEST_CASE("CAT-Graph closes loops on the second lap of a distinctive ring and ne
   options.num_particles = 500;
   // The default offset is chosen for 500-word SIFT vocabularies of real
   // frames (70 words each); here a frame has 3 words.
-  options.new_place_log_offset = 0.0;
+  options.new_place.log_offset = 0.0;
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   int first_lap_closures = 0, second_lap_closures = 0, second_lap_frames = 0;
@@ -178,7 +178,7 @@ TEST_CASE("A forward camera turned against the map makes no visual closure while
   const int forward_frames = per_lap + per_lap / 2, reversed_frames = 40;  // 4 m back: inside the exclusion window
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
-  options.new_place_log_offset = 0.0;
+  options.new_place.log_offset = 0.0;
   CatGraphFilter filter(model, options);
   std::vector<double> s_of_frame;  // where on the ring each frame was taken
   int forward_closures = 0, reversed_closures = 0, tracked = 0, reversed_hypotheses = 0;
@@ -231,53 +231,11 @@ struct TrainedRing {
   static CatGraphOptions Options(double new_place_log_offset) {
     CatGraphOptions options = RingOptions();
     options.num_particles = 200;
-    options.odometric_gate = false;
-    options.new_place_log_offset = new_place_log_offset;
+    options.gate.enabled = false;
+    options.new_place.log_offset = new_place_log_offset;
     return options;
   }
 };
-
-// The relative offset adds c times the frame's self-evidence (how much
-// better than the mean field a node with exactly its words explains it) to
-// log p(z | new place): at the first frame with particles on the map, c
-// gives what a constant offset of c · self-evidence gives. The filters agree
-// until then (no particles, new place certain), so the states are the same.
-TEST_CASE("the relative new-place offset is c times the frame's self-evidence", "[frontend][catgraph]") {
-  const TrainedRing ring;
-  const FabMapModel& model = ring.model;
-  const std::vector<WordSet>& frames = ring.frames;
-  // The first step on the map, as seen by a filter with these offsets.
-  auto first_on_map = [&](double constant, double relative, int stop_at) {
-    CatGraphOptions options = TrainedRing::Options(constant);
-    options.new_place_relative_offset = relative;
-    CatGraphFilter filter(model, options);
-    for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
-      const CatGraphStep step = filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), frames[k]);
-      if (k == stop_at || (stop_at < 0 && !std::isnan(step.log_evidence))) return std::make_pair(k, step);
-    }
-    FAIL("no particle reached the map");
-    return std::make_pair(-1, CatGraphStep{});
-  };
-  constexpr double kRelative = 0.25;
-  const auto [k, relative] = first_on_map(0.0, kRelative, -1);
-  const FrameLikelihood likelihood = model.ForFrame(frames[k]);
-  const double self_evidence = likelihood.LogLikelihood(frames[k]) - likelihood.LogNewPlaceLikelihood();
-  REQUIRE(self_evidence > 4.0);  // a frame with words scores well above the mean field against itself
-  const auto [k_constant, constant] = first_on_map(kRelative * self_evidence, 0.0, k);
-  const auto [k_none, none] = first_on_map(0.0, 0.0, k);
-  REQUIRE(k_constant == k);
-  REQUIRE(k_none == k);
-  CHECK(relative.new_place_probability == Approx(constant.new_place_probability).epsilon(1e-9));
-  CHECK(relative.best.value == Approx(constant.best.value).epsilon(1e-9));
-  // The offset did something: without it new place holds less.
-  const double odds = relative.new_place_probability / (1.0 - relative.new_place_probability);
-  const double odds_none = none.new_place_probability / (1.0 - none.new_place_probability);
-  CHECK(std::log(odds) - std::log(odds_none) == Approx(kRelative * self_evidence).epsilon(1e-6));
-
-  CatGraphOptions bad;
-  bad.new_place_relative_offset = 1.0;
-  CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_relative_offset"));
-}
 
 // The stay fraction credits the map's carried mass (1 - f) times the offset
 // against the mass entering from a new place, once the robot is on the map
@@ -293,8 +251,8 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   constexpr double kOffset = 6.0;
   auto run = [&](double stay_fraction, double stay_relative = 0.0) {
     CatGraphOptions options = TrainedRing::Options(kOffset);
-    options.new_place_stay_fraction = stay_fraction;
-    options.new_place_stay_relative_offset = stay_relative;
+    options.new_place.stay_fraction = stay_fraction;
+    options.new_place.stay_relative_offset = stay_relative;
     CatGraphFilter filter(model, options);
     std::vector<CatGraphStep> steps;
     for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
@@ -320,7 +278,7 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   CHECK(entering >= 1);
   const double mapped = 1.0 - one[k - 1].new_place_probability;
   const CatGraphOptions defaults = RingOptions();
-  const double h = defaults.leave_probability, p_new = defaults.new_place_prior;
+  const double h = defaults.new_place.leave_probability, p_new = defaults.new_place_prior;
   const double keep_one = mapped * (1.0 - h) + (1.0 - mapped) * (1.0 - p_new);
   const double keep_credited =
       mapped * (1.0 - h) * std::exp((1.0 - kFraction) * kOffset) + (1.0 - mapped) * (1.0 - p_new);
@@ -347,12 +305,12 @@ TEST_CASE("a stay fraction credits the mass carried on the map, not the mass ent
   }
 
   CatGraphOptions bad;
-  bad.new_place_stay_fraction = 1.5;
-  CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_stay_fraction"));
+  bad.new_place.stay_fraction = 1.5;
+  CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place.stay_fraction"));
   bad = CatGraphOptions{};
   for (const double stay_relative : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
-    bad.new_place_stay_relative_offset = stay_relative;
-    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place_stay_relative_offset"));
+    bad.new_place.stay_relative_offset = stay_relative;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("new_place.stay_relative_offset"));
   }
 }
 
@@ -369,15 +327,15 @@ TEST_CASE("held after a closure: the mass on the map keeps the robot there only 
   for (const bool hold : {false, true}) {
     CAPTURE(hold);
     CatGraphOptions options = TrainedRing::Options(kOffset);
-    options.new_place_stay_fraction = kFraction;
-    options.hold_after_closure = hold;
+    options.new_place.stay_fraction = kFraction;
+    options.new_place.hold_after_closure = hold;
     // Sure to leave within a few frames, so that the cloud comes onto the map
     // again and again, and closing only on frames it explains well, so that it
     // is on the map without a closure on some.
-    options.leave_probability = 0.05;
-    options.closure_min_evidence = 0.8;
+    options.new_place.leave_probability = 0.05;
+    options.recognition.closure_min_evidence = 0.8;
     CatGraphFilter filter(ring.model, options);
-    const double h = options.leave_probability, p_new = options.new_place_prior;
+    const double h = options.new_place.leave_probability, p_new = options.new_place_prior;
     auto log_odds = [](double p) { return std::log(p) - std::log1p(-p); };
     double mapped = 0.0;
     bool closed = false;  // since the mass came onto the map
@@ -424,7 +382,7 @@ struct ChangedRing {
   std::uint64_t seed = 1;  // the filter's
   int changed_words = 40;  // the vocabulary's words beyond the ring's: 3 per changed 0.5 m and 2 more
   std::optional<Eigen::Vector3d> odometric_motion_sigma = std::nullopt;  // CatGraphOptions'
-  double leave_probability = RingOptions().leave_probability;
+  double leave_probability = RingOptions().new_place.leave_probability;
   double closure_min_evidence = 0.0;
   bool defaults = false;  // the defaults in place of RingOptions() (and the two fields above)
 };
@@ -441,12 +399,12 @@ ChangedRingRun RunChangedRing(const ChangedRing& ring) {
   const FabMapModel model(LearnChowLiuTree(training, RingWorld::Words() + ring.changed_words), FabMapOptions{});
   CatGraphOptions options = ring.defaults ? CatGraphOptions{} : RingOptions();
   options.num_particles = 500;
-  options.new_place_log_offset = 0.0;
-  options.odometric_inference = ring.odometric_inference;
-  options.odometric_motion_sigma = ring.odometric_motion_sigma;
+  options.new_place.log_offset = 0.0;
+  options.inference.enabled = ring.odometric_inference;
+  options.inference.motion_sigma = ring.odometric_motion_sigma;
   if (!ring.defaults) {
-    options.leave_probability = ring.leave_probability;
-    options.closure_min_evidence = ring.closure_min_evidence;
+    options.new_place.leave_probability = ring.leave_probability;
+    options.recognition.closure_min_evidence = ring.closure_min_evidence;
   }
   options.seed = ring.seed;
   CatGraphFilter filter(model, options);
@@ -573,8 +531,8 @@ TEST_CASE("A visual closure needs what the camera sees: a cloud held on the map 
   }
   CatGraphOptions bad;
   for (const double r : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
-    bad.closure_min_evidence = r;
-    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("closure_min_evidence"));
+    bad.recognition.closure_min_evidence = r;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("recognition.closure_min_evidence"));
   }
 }
 
@@ -666,9 +624,9 @@ ShiftedStretch RunShiftedStretch(double observation_window_m, std::uint64_t seed
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
-  options.new_place_log_offset = 0.0;
-  options.odometric_inference = false;
-  options.observation_window_m = observation_window_m;
+  options.new_place.log_offset = 0.0;
+  options.inference.enabled = false;
+  options.recognition.observation_window_m = observation_window_m;
   options.seed = seed;
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
@@ -708,8 +666,8 @@ TEST_CASE("Eq 2 over a window of path: images pointing a little behind no longer
   }
   CatGraphOptions bad;
   for (const double w : {-0.1, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
-    bad.observation_window_m = w;
-    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("observation_window_m"));
+    bad.recognition.observation_window_m = w;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("recognition.observation_window_m"));
   }
 }
 
@@ -747,9 +705,9 @@ TEST_CASE("At a visual closure O starts from V's particles within d_h of the mat
     CAPTURE(seed_local, factor);
     CatGraphOptions options = RingOptions();
     options.num_particles = 500;
-    options.new_place_log_offset = 0.0;
-    options.odometric_seed_local = seed_local;
-    options.odometric_particle_factor = factor;
+    options.new_place.log_offset = 0.0;
+    options.inference.seed_local = seed_local;
+    options.inference.particle_factor = factor;
     CatGraphFilter filter(model, options);
     int closures = 0;
     long left_out = 0;  // V's particles farther than d_h from the match
@@ -812,9 +770,9 @@ TEST_CASE("Total-path validation weighs the odometric hypothesis at the validati
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words() + 200), FabMapOptions{});
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
-  options.new_place_log_offset = 0.0;
-  options.total_validation_m = RingWorld::kStep;
-  options.leave_probability = options.new_place_prior;  // the spec's new place, without memory
+  options.new_place.log_offset = 0.0;
+  options.inference.total_validation_m = RingWorld::kStep;
+  options.new_place.leave_probability = options.new_place_prior;  // the spec's new place, without memory
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   int validated = 0, discarded = 0;
@@ -895,11 +853,11 @@ AliasedRingRun RunAliasedRing(const AliasedRing& ring = {}) {
   const FabMapModel model(LearnChowLiuTree(world.Lap(), RingWorld::Words()), FabMapOptions{});
   CatGraphOptions options = RingOptions();
   options.num_particles = 500;
-  options.new_place_log_offset = 0.0;
-  options.total_path_retries = ring.total_path_retries;
+  options.new_place.log_offset = 0.0;
+  options.inference.total_path_retries = ring.total_path_retries;
   if (ring.held) {
-    options.leave_probability = 1e-20;
-    options.hold_after_closure = true;
+    options.new_place.leave_probability = 1e-20;
+    options.new_place.hold_after_closure = true;
   }
   CatGraphFilter filter(model, options);
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
@@ -1109,8 +1067,8 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
 
   CatGraphOptions bad;
   for (const int retries : {-1, 101}) {
-    bad.total_path_retries = retries;
-    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("total_path_retries"));
+    bad.inference.total_path_retries = retries;
+    CHECK_THROWS_WITH(Validate(bad), Catch::Contains("inference.total_path_retries"));
   }
 }
 
@@ -1131,8 +1089,7 @@ double NewPlaceAfterGap(const CatGraphOptions& options) {
 CatGraphOptions GapOptions(double sequence_break_s) {
   CatGraphOptions options = RingOptions();
   options.num_particles = 200;
-  options.new_place_log_offset = 0.0;
-  options.new_place_motion = NewPlaceMotion::kFilterNoise;  // the premise below: Eq 6 weighed by Q
+  options.new_place.log_offset = 0.0;
   options.sequence_break_s = sequence_break_s;
   return options;
 }
@@ -1151,10 +1108,10 @@ TEST_CASE("Eq 6 weighs the new place's odometry on new_place_motion_sigma when i
   // the new place holds. Q itself (the particles' proposal and Eq 1) is the
   // same in both runs.
   CatGraphOptions wide = GapOptions(1e9);
-  wide.new_place_motion_sigma = Eigen::Vector3d(10.0, 10.0, 10.0);
+  wide.new_place.motion_sigma = Eigen::Vector3d(10.0, 10.0, 10.0);
   CHECK(NewPlaceAfterGap(wide) > 1e-3);
   CatGraphOptions as_q = GapOptions(1e9);
-  as_q.new_place_motion_sigma = as_q.motion_sigma;
+  as_q.new_place.motion_sigma = as_q.motion_sigma;
   CHECK(NewPlaceAfterGap(as_q) == NewPlaceAfterGap(GapOptions(1e9)));
 }
 
@@ -1184,8 +1141,8 @@ TEST_CASE("The odometric gate keeps a first pass through an aliased corridor fre
     const FabMapModel model(LearnChowLiuTree(training, 4 * static_cast<int>(kLength / 0.5)), FabMapOptions{});
     CatGraphOptions options = RingOptions();
     options.num_particles = 200;
-    options.new_place_log_offset = 0.0;
-    options.odometric_gate = gate;
+    options.new_place.log_offset = 0.0;
+    options.gate.enabled = gate;
     options.seed = seed;
     CatGraphFilter filter(model, options);
     int closures = 0;
@@ -1201,25 +1158,16 @@ TEST_CASE("The odometric gate keeps a first pass through an aliased corridor fre
   }
 }
 
-TEST_CASE("Eq 6's odometry term: Q's sigma, or the odometry's own spread where it is wider", "[frontend][catgraph]") {
-  const Eigen::Vector3d q(0.05, 0.05, 0.005), mean(0.05, 0.0, 0.01), spread(0.01, 0.002, 0.04);
-  // A 90-degree turn over 15 frames: 0.105 rad in a frame, 0.095 over the mean.
-  const Eigen::Vector3d turn(0.05, 0.0, 0.01 + 0.095);
-  // (0.095 / 0.005)^2 / 2 = 180.5 nats under Q alone ...
-  CHECK(NewPlaceMotionLogLikelihood(turn, mean, spread, q, NewPlaceMotion::kFilterNoise) == Approx(-180.5));
-  // ... and (0.095 / 0.04)^2 / 2 = 2.82 nats where the odometry turns that much.
-  CHECK(NewPlaceMotionLogLikelihood(turn, mean, spread, q, NewPlaceMotion::kOdometrySpread) ==
-        Approx(-0.5 * std::pow(0.095 / 0.04, 2)));
-  // Where the spread is narrower than Q, Q holds: x and y are weighed as before.
+TEST_CASE("Eq 6's odometry term weighs the odometry's distance from its mean on the given sigma",
+          "[frontend][catgraph]") {
+  const Eigen::Vector3d q(0.05, 0.05, 0.005), mean(0.05, 0.0, 0.01);
+  // A 90-degree turn over 15 frames: 0.105 rad in a frame, 0.095 over the
+  // mean: (0.095 / 0.005)^2 / 2 = 180.5 nats.
+  CHECK(NewPlaceMotionLogLikelihood(Eigen::Vector3d(0.05, 0.0, 0.105), mean, q) == Approx(-180.5));
   const Eigen::Vector3d faster(0.15, 0.1, 0.01);
-  const double expected = -0.5 * (std::pow(0.1 / 0.05, 2) + std::pow(0.1 / 0.05, 2));
-  CHECK(NewPlaceMotionLogLikelihood(faster, mean, spread, q, NewPlaceMotion::kOdometrySpread) == Approx(expected));
-  CHECK(NewPlaceMotionLogLikelihood(faster, mean, spread, q, NewPlaceMotion::kFilterNoise) == Approx(expected));
-  CHECK(NewPlaceMotionLogLikelihood(mean, mean, spread, q, NewPlaceMotion::kOdometrySpread) == 0.0);
-  for (const auto model : {NewPlaceMotion::kFilterNoise, NewPlaceMotion::kOdometrySpread}) {
-    CHECK(NewPlaceMotionFromString(ToString(model)) == model);
-  }
-  CHECK_FALSE(NewPlaceMotionFromString("bogus").has_value());
+  CHECK(NewPlaceMotionLogLikelihood(faster, mean, q) ==
+        Approx(-0.5 * (std::pow(0.1 / 0.05, 2) + std::pow(0.1 / 0.05, 2))));
+  CHECK(NewPlaceMotionLogLikelihood(mean, mean, q) == 0.0);
 }
 
 TEST_CASE("Eq 1 weighs the offset along and across the particle's way, not along the map's axes",
@@ -1256,20 +1204,20 @@ TEST_CASE("CAT-Graph options out of range are refused", "[frontend][catgraph]") 
     o.motion_sigma[1] = bad;
     CHECK_THROWS_AS(Validate(o), std::invalid_argument);
     o = CatGraphOptions{};
-    o.new_place_motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
+    o.new_place.motion_sigma = Eigen::Vector3d(0.05, 0.05, 0.005);
     CHECK_NOTHROW(Validate(o));
-    (*o.new_place_motion_sigma)[2] = bad;
-    CHECK_THROWS_WITH(Validate(o), Catch::Contains("new_place_motion_sigma"));
+    (*o.new_place.motion_sigma)[2] = bad;
+    CHECK_THROWS_WITH(Validate(o), Catch::Contains("new_place.motion_sigma"));
     o = CatGraphOptions{};
-    o.odometric_motion_sigma = Eigen::Vector3d(0.02, 0.05, 0.005);
+    o.inference.motion_sigma = Eigen::Vector3d(0.02, 0.05, 0.005);
     CHECK_NOTHROW(Validate(o));
-    (*o.odometric_motion_sigma)[0] = bad;
-    CHECK_THROWS_WITH(Validate(o), Catch::Contains("odometric_motion_sigma"));
+    (*o.inference.motion_sigma)[0] = bad;
+    CHECK_THROWS_WITH(Validate(o), Catch::Contains("inference.motion_sigma"));
   }
   for (const int bad : {0, 101}) {
     o = CatGraphOptions{};
-    o.odometric_particle_factor = bad;
-    CHECK_THROWS_WITH(Validate(o), Catch::Contains("odometric_particle_factor"));
+    o.inference.particle_factor = bad;
+    CHECK_THROWS_WITH(Validate(o), Catch::Contains("inference.particle_factor"));
   }
   CHECK_NOTHROW(Validate(CatGraphOptions{}));
 }

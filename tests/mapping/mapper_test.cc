@@ -152,7 +152,7 @@ TEST_CASE("on a ring the Mapper reports each closure at its frame, re-solves whe
   const FabMapModel model(LearnChowLiuTree(lap, 4 * 60), FabMapOptions{});
   MapperOptions options;
   options.front_end.filter.num_particles = 500;
-  options.front_end.filter.new_place_log_offset = 0.0;  // 3 words a frame, not a real image's 70
+  options.front_end.filter.new_place.log_offset = 0.0;  // 3 words a frame, not a real image's 70
   Mapper mapper(model, options);
   Localizer offline(model, options.front_end);
   Pose2 odometry;
@@ -202,8 +202,8 @@ TEST_CASE("the Mapper refuses options out of range", "[mapping]") {
   uncertainty.front_end.graph_uncertainty.closure_sigma.x() = 0.0;
   CHECK_THROWS_WITH(Mapper(model, uncertainty), Catch::Contains("PoseGraphUncertainty"));
   MapperOptions gate;
-  gate.back_end.switch_gate_probability = 1.0;
-  CHECK_THROWS_WITH(Mapper(model, gate), Catch::Contains("switch_gate_probability"));
+  gate.back_end.gate.probability = 1.0;
+  CHECK_THROWS_WITH(Mapper(model, gate), Catch::Contains("gate.probability"));
   MapperOptions iterations;
   iterations.online_max_iterations = 0;
   CHECK_THROWS_WITH(Mapper(model, iterations), Catch::Contains("online_max_iterations"));
