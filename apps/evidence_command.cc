@@ -136,7 +136,7 @@ void AddEvidenceCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--near-min", o->evidence.near_min_m, "Near places: from this far (m)")->capture_default_str();
   cmd->add_option("--near-max", o->evidence.near_max_m, "... to this far (m); farther ones are far")
       ->capture_default_str();
-  cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")
+  cmd->add_option("--threads", o->base.pipeline.front_end.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");

@@ -129,7 +129,8 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
 }
 
 void RunExperiment(ExperimentOptions& o, std::ostream& out) {
-  PoseGraphOptimizerOptions optimizer;
+  ValidateOptions(o.front);
+  PoseGraphOptimizerOptions optimizer = o.front.pipeline.back_end;
   optimizer.method = *RobustMethodFromString(o.method);
   Validate(optimizer);
   std::vector<HierarchyOptions> policies;
@@ -212,7 +213,7 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
                   "cascade and coupled: front-end re-runs with the rejected visual closures vetoed (as catgraph map)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")
+  cmd->add_option("--threads", o->front.pipeline.front_end.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   AddOverwriteFlag(*cmd, o->front.overwrite);

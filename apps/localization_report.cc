@@ -42,7 +42,6 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
       (std::string(stage) == "features" ? features : filter)->Update(done, total);
     };
   }
-  o.pipeline.front_end.threads = o.threads;
   FrontEndInputs in;
   if (o.observation == ObservationKind::kHolistic) {
     HolisticFrontEnd holistic = PrepareHolistic(d, HolisticOptions{}, o.pipeline.front_end);
@@ -480,15 +479,15 @@ void ValidateOptions(const LocalizeCommandOptions& o) {
   try {
     mapping::Validate(o.pipeline);
   } catch (const std::invalid_argument& e) {
-    const std::string what = e.what();
+    // The flags given, by the field each sets.
+    std::map<std::string, const CLI::Option*> given;
+    for (const auto& [option, name] : o.option_fields) {
+      if (option->count() > 0) given.emplace(name, option);
+    }
     std::vector<std::string> fields;
-    for (const auto& [option, name] : o.option_fields) {
-      if (option->count() > 0) fields.push_back(name);
-    }
-    const std::string named = mapping::FieldNamedBy(what, fields);
-    for (const auto& [option, name] : o.option_fields) {
-      if (option->count() > 0 && name == named) throw CLI::ValidationError(option->get_name(), what);
-    }
+    for (const auto& [name, option] : given) fields.push_back(name);
+    const auto named = given.find(mapping::FieldNamedBy(e.what(), fields));
+    if (named != given.end()) throw CLI::ValidationError(named->second->get_name(), e.what());
     throw;
   }
 }

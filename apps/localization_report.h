@@ -25,7 +25,7 @@ namespace catgraph {
 struct LocalizeCommandOptions {
   std::string dataset, vocabulary, output;
   ObservationKind observation = ObservationKind::kFabMap;
-  int words = 500, train_every = 0, threads = 0;
+  int words = 500, train_every = 0;
   // Every library option: --preset, then --options FILE, then the flags.
   // `localize` uses the front end's; `map` all of them.
   mapping::MapperOptions pipeline;

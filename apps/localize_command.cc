@@ -152,7 +152,7 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
                 "Map each cell as catgraph map does (the back end and hierarchy of the options, the rejected "
                 "visual closures vetoed and CAT-Graph+ re-run); also counts the false inferences the back end "
                 "accepted");
-  cmd->add_option("--threads", o->base.threads, "Feature-extraction threads (0: every core)")
+  cmd->add_option("--threads", o->base.pipeline.front_end.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   cmd->add_flag("--quiet", o->base.quiet, "No progress bar");
@@ -171,7 +171,7 @@ void AddLocalizeCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("dataset", o->dataset, "Dataset directory")->required();
   cmd->add_option("-o,--output", o->output, "Output directory")->required();
   AddLocalizationOptions(*cmd, *o);
-  cmd->add_option("--threads", o->threads, "Feature-extraction threads (0: every core)")
+  cmd->add_option("--threads", o->pipeline.front_end.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress bars");

@@ -30,7 +30,6 @@
 
 namespace catgraph {
 
-using mapping::HierarchyOptionsFor;
 using mapping::InjectionOutcome;
 using mapping::KindCounts;
 using mapping::MapOutcome;
@@ -363,7 +362,7 @@ void AddMapCommand(CLI::App& app, std::ostream& out) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str()
       ->group(kUnlistedGroup);
-  cmd->add_option("--threads", o->front.threads, "Feature-extraction threads (0: every core)")
+  cmd->add_option("--threads", o->front.pipeline.front_end.threads, "Feature-extraction threads (0: every core)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   cmd->add_flag("--quiet", o->front.quiet, "No progress bars");

@@ -1,6 +1,5 @@
 #include "mapping/options_file.h"
 
-#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -9,7 +8,6 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
 #include <utility>
 
 #include <yaml-cpp/yaml.h>
