@@ -123,7 +123,7 @@ void AddEvidenceCommand(CLI::App& app, std::ostream& out) {
       "How well the observation model tells the true place from its look-alikes, frame by frame against ground truth: each "
       "query frame's self-evidence and the evidence of its true, near and far places (evidence.csv), and how "
       "often each scores over a grid of new-place offsets (summary.md). The measurement behind "
-      "--new-place-offset and --new-place-relative-offset: docs/frontend.md.");
+      "--new-place-offset and --new-place-stay-relative-offset: docs/frontend.md.");
   cmd->add_option("dataset", o->base.dataset, "Dataset directory (with ground truth and two traversals)")->required();
   cmd->add_option("-o,--output", o->base.output, "Output directory")->required();
   AddVocabularyOptions(*cmd, o->base);

@@ -338,6 +338,7 @@ CLI::Option* AddSigmaOption(CLI::App& cmd, const std::string& name, const std::s
 }  // namespace
 
 void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o, const std::vector<std::string>& shown) {
+  const std::size_t command_options = cmd.get_options().size();  // the command's own stay listed
   // Before every other option, so that their callbacks run first and the
   // flags given override the preset and the file.
   cmd.add_option_function<std::string>(
@@ -466,11 +467,11 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o, const std:
   cmd.formatter(std::make_shared<Formatter>());
   cmd.footer("Every other option is a key of --options FILE (docs/file-formats.md \"Options files\"); the flags "
              "that also set some of them are listed in docs/cli.md.");
-  for (CLI::Option* option : cmd.get_options()) {
-    const std::string& name = option->get_name();
-    if (name.starts_with("--") && name != "--help" && name != "--preset" && name != "--options" &&
-        std::find(shown.begin(), shown.end(), name) == shown.end()) {
-      option->group(kUnlistedGroup);
+  const std::vector<CLI::Option*> options = cmd.get_options();
+  for (std::size_t i = command_options; i < options.size(); ++i) {
+    const std::string& name = options[i]->get_name();
+    if (name != "--preset" && name != "--options" && std::find(shown.begin(), shown.end(), name) == shown.end()) {
+      options[i]->group(kUnlistedGroup);
     }
   }
 }

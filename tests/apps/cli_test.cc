@@ -531,6 +531,12 @@ TEST_CASE("localize and map list at most 15 options in --help; an options file's
     CHECK(help.out.find("--options") != std::string::npos);
     CHECK(help.out.find("--gate-base") == std::string::npos);  // accepted, listed in docs/cli.md
   }
+  // A command's own options stay listed beside the filter's.
+  for (const char* command : {"localize", "map", "hierarchy-experiment", "inference-sweep"}) {
+    const Result help = Run({command, "--help"});
+    CAPTURE(command, help.out);
+    CHECK(help.out.find("-o,--output") != std::string::npos);
+  }
   const auto dir = testing::TempDir("cli_options");
   std::ofstream(dir / "bad.yaml") << "front_end:\n  filter:\n    gate:\n      fraction: -0.5\n";
   const Result bad = Run({"map", "no-such-dataset", "-o", (dir / "out").string(), "--options",
