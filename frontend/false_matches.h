@@ -9,7 +9,7 @@
 //
 // The plan is made from the dataset's odometry and ground truth before the
 // filter runs (ground truth makes sure every match is false); Localize
-// applies it through CatGraphFilter's Aliasing.
+// applies it through CatGraphFilter::Commit (ClosureOverride).
 #ifndef CATGRAPH_FRONTEND_FALSE_MATCHES_H_
 #define CATGRAPH_FRONTEND_FALSE_MATCHES_H_
 

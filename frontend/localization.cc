@@ -168,7 +168,7 @@ void Localizer::AddClosure(const LoopClosure& c, double information_scale) {
 
 // The id of the visual closure a step's inferences hung from (-1: none).
 int Localizer::ReferenceClosure(const CatGraphStep& step) const {
-  const auto found = visual_closure_of_frame_.find(step.reference_node >= 0 ? FrameOf(step.reference_node) : -1);
+  const auto found = visual_closure_of_frame_.find(step.inference.reference_node >= 0 ? FrameOf(step.inference.reference_node) : -1);
   return found == visual_closure_of_frame_.end() ? -1 : found->second;
 }
 
@@ -178,15 +178,16 @@ void Localizer::Discard(const InferredClosure& inferred, int reference, int vali
                                           LocationError(static_cast<std::size_t>(at), inferred.location), reason});
 }
 
-FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z, const Aliasing& imposed) {
+FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z, const ClosureOverride& imposed) {
   const PoseGraphUncertainty& uncertainty = result_.options.graph_uncertainty;
   const std::size_t k = result_.frames.size();
-  Aliasing aliasing = imposed;
-  aliasing.vetoed = aliasing.vetoed || result_.options.vetoed_frames.count(static_cast<int>(k)) > 0;
+  ClosureOverride decision = imposed;
+  decision.vetoed = decision.vetoed || result_.options.vetoed_frames.count(static_cast<int>(k)) > 0;
   truth_.push_back(in.truth);
   const Pose2 u = last_odometry_ ? last_odometry_->Between(in.odometry) : Pose2();
   last_odometry_ = in.odometry;
-  const CatGraphStep step = filter_.Step(static_cast<int>(k), in.time_s, u, z, aliasing);
+  CatGraphStep step = filter_.Propose(static_cast<int>(k), in.time_s, u, z);
+  filter_.Commit(step, decision);
   FrameLocalization f;
   f.frame = static_cast<int>(k);
   f.traversal = in.traversal;
@@ -222,12 +223,12 @@ FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z
     c.T_frame_matched = step.T_node_matched;
     c.hypothesis = step.best.value;
     c.error_m = f.error_m;
-    c.injected = aliasing.false_match >= 0;
-    c.vetoed = aliasing.vetoed;
+    c.injected = decision.force_node >= 0;
+    c.vetoed = decision.vetoed;
     AddClosure(c, 1.0);
     // CAT-Graph+: what this visual closure validated or discarded.
     const int reference = ReferenceClosure(step);
-    for (const InferredClosure& inferred : step.inferred) {
+    for (const InferredClosure& inferred : step.inference.inferred) {
       LoopClosure i;
       i.id = static_cast<int>(result_.graph.constraints.size());
       i.kind = ClosureKind::kOdometryInferred;
@@ -237,13 +238,15 @@ FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z
       i.hypothesis = inferred.location.value;
       i.error_m = LocationError(static_cast<std::size_t>(i.frame), inferred.location);
       i.parents = {reference, c.id};
-      AddClosure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inferred.size()) : 1.0);
+      AddClosure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inference.inferred.size()) : 1.0);
     }
-    for (const InferredClosure& inferred : step.discarded) Discard(inferred, reference, c.id, DiscardReason::kTotalPath);
+    for (const InferredClosure& inferred : step.inference.discarded) Discard(inferred, reference, c.id, DiscardReason::kTotalPath);
     visual_closure_of_frame_[f.frame] = c.id;
   }
-  for (const InferredClosure& inferred : step.lost) Discard(inferred, ReferenceClosure(step), -1, step.lost_reason);
-  f.inference_pending = step.inference_pending;
+  for (const InferredClosure& inferred : step.inference.lost) {
+    Discard(inferred, ReferenceClosure(step), -1, step.inference.lost_reason);
+  }
+  f.inference_pending = step.inference.pending;
   result_.frames.push_back(f);
   return f;
 }
@@ -255,7 +258,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
                                 std::to_string(d.frames.size()) + " frames");
   }
   // The false matches imposed on each frame.
-  std::vector<Aliasing> aliasing(d.frames.size());
+  std::vector<ClosureOverride> imposed(d.frames.size());
   for (const FalseVisualMatch& m : options.false_matches) {
     auto frame_ok = [&](int f) { return f >= 0 && static_cast<std::size_t>(f) < d.frames.size(); };
     if (!(frame_ok(m.first_frame) && frame_ok(m.last_frame) && frame_ok(m.matched_first_frame) &&
@@ -267,13 +270,13 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
                                   "-" + std::to_string(m.matched_last_frame));
     }
     for (int f = m.first_frame; f <= m.last_frame; ++f) {
-      if (aliasing[static_cast<std::size_t>(f)].withhold_closure) {
+      if (imposed[static_cast<std::size_t>(f)].withhold) {
         throw std::invalid_argument("Localize: false visual matches overlap at frame " + std::to_string(f));
       }
-      aliasing[static_cast<std::size_t>(f)].withhold_closure = true;
+      imposed[static_cast<std::size_t>(f)].withhold = true;
     }
-    aliasing[static_cast<std::size_t>(m.first_frame)].false_match = m.matched_first_frame;
-    aliasing[static_cast<std::size_t>(m.last_frame)].false_match = m.matched_last_frame;
+    imposed[static_cast<std::size_t>(m.first_frame)].force_node = m.matched_first_frame;
+    imposed[static_cast<std::size_t>(m.last_frame)].force_node = m.matched_last_frame;
   }
   for (const int f : options.vetoed_frames) {
     if (f < 0 || static_cast<std::size_t>(f) >= d.frames.size()) {
@@ -294,7 +297,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     in.odometry = odometry[k];
     in.traversal = d.frames[k].traversal;
     if (!truth.empty()) in.truth = truth[k];
-    localizer.AddFrame(in, observations[k], aliasing[k]);
+    localizer.AddFrame(in, observations[k], imposed[k]);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
       options.on_progress("filter", k + 1, d.frames.size());
     }

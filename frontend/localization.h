@@ -104,7 +104,7 @@ struct LocalizationOptions {
   // Perceptual aliasing imposed on the filter (false_matches.h); empty:
   // none. Checked against the dataset's frames.
   std::vector<FalseVisualMatch> false_matches;
-  // Frames whose visual closure CAT-Graph+ must not use (Aliasing::vetoed):
+  // Frames whose visual closure CAT-Graph+ must not use (ClosureOverride::vetoed):
   // the frames of visual closures the back end rejected. The closures are
   // still made and reported, flagged `vetoed`.
   std::set<int> vetoed_frames;
@@ -202,8 +202,9 @@ class Localizer {
   // (a visual one, then the inferences it validated) are appended to
   // result().closures, the inferences it discarded or dropped to
   // result().discarded_inferences, its vertex and edges to result().graph.
-  // `aliasing` imposes a false visual match (Localize's false_matches).
-  FrameLocalization AddFrame(const FrameInput& frame, const Observation& z, const Aliasing& aliasing = {});
+  // `decision` overrules the filter's closure decision (Localize's false
+  // matches); the frame's veto (options.vetoed_frames) is added to it.
+  FrameLocalization AddFrame(const FrameInput& frame, const Observation& z, const ClosureOverride& decision = {});
 
   const LocalizationResult& result() const { return result_; }
   // The result so far, moved out; the localizer is then spent.

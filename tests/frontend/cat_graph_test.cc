@@ -450,11 +450,11 @@ TEST_CASE("CAT-Graph+ infers the closures vision misses where the ring changed, 
   std::set<int> inferred_nodes;
   double worst = 0.0;
   for (const CatGraphStep& step : run.steps) {
-    for (const InferredClosure& c : step.inferred) {
+    for (const InferredClosure& c : step.inference.inferred) {
       inferred_nodes.insert(c.node);
       CHECK(step.closure);                      // validated at a visual closure ...
-      CHECK(step.reference_node >= 0);          // ... hanging from an earlier one
-      CHECK(step.reference_node < c.node);
+      CHECK(step.inference.reference_node >= 0);          // ... hanging from an earlier one
+      CHECK(step.inference.reference_node < c.node);
       const int frame = c.node, matched = c.matched_node;  // node ids are frame indices here
       worst = std::max(worst, RingDistance(frame, matched));
     }
@@ -492,7 +492,7 @@ TEST_CASE("A visual closure needs what the camera sees: a cloud held on the map 
     std::set<int> inferred_nodes;
     double worst = 0.0;
     for (const CatGraphStep& step : gated.steps) {
-      for (const InferredClosure& c : step.inferred) {
+      for (const InferredClosure& c : step.inference.inferred) {
         inferred_nodes.insert(c.node);
         worst = std::max(worst, RingDistance(c.node, c.matched_node));  // node ids are frame indices
       }
@@ -568,9 +568,9 @@ DeepInferences RunDeepChange(const std::optional<Eigen::Vector3d>& odometric_mot
                                                .changed_words = 200,
                                                .odometric_motion_sigma = odometric_motion_sigma});
     for (const CatGraphStep& step : run.steps) {
-      deep.discarded += static_cast<int>(step.discarded.size() + step.lost.size());
-      for (const InferredClosure& c : step.inferred) {
-        if (c.node - step.reference_node < 100) continue;
+      deep.discarded += static_cast<int>(step.inference.discarded.size() + step.inference.lost.size());
+      for (const InferredClosure& c : step.inference.inferred) {
+        if (c.node - step.inference.reference_node < 100) continue;
         const double error = RingDistanceM(RingPositionM(run.graph, c.location), c.node * RingWorld::kStep);
         sum_sq += error * error;
         ++deep.count;
@@ -683,10 +683,10 @@ TEST_CASE("O on its own Q: the visual filter as before, O's along-track wander n
   for (std::size_t k = 0; k < own.steps.size(); ++k) {
     CAPTURE(k);
     CheckSameVisualStep(own.steps[k], shared.steps[k]);
-    REQUIRE(own.steps[k].inferred.size() == shared.steps[k].inferred.size());
-    for (std::size_t i = 0; i < own.steps[k].inferred.size(); ++i) {
-      differ += own.steps[k].inferred[i].location.alpha != shared.steps[k].inferred[i].location.alpha ||
-                own.steps[k].inferred[i].location.edge != shared.steps[k].inferred[i].location.edge;
+    REQUIRE(own.steps[k].inference.inferred.size() == shared.steps[k].inference.inferred.size());
+    for (std::size_t i = 0; i < own.steps[k].inference.inferred.size(); ++i) {
+      differ += own.steps[k].inference.inferred[i].location.alpha != shared.steps[k].inference.inferred[i].location.alpha ||
+                own.steps[k].inference.inferred[i].location.edge != shared.steps[k].inference.inferred[i].location.edge;
     }
   }
   CHECK(differ > 0);
@@ -780,8 +780,8 @@ TEST_CASE("Total-path validation weighs the odometric hypothesis at the validati
     WordSet z = world.Observe(k * RingWorld::kStep);
     if (k >= per_lap && k % 4 == 2) z = {RingWorld::Words() + 2 * (k % 100), RingWorld::Words() + 2 * (k % 100) + 1};
     const CatGraphStep step = filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), z);
-    validated += static_cast<int>(step.inferred.size());
-    discarded += static_cast<int>(step.discarded.size());
+    validated += static_cast<int>(step.inference.inferred.size());
+    discarded += static_cast<int>(step.inference.discarded.size());
   }
   INFO(validated << " one-frame inferences validated, " << discarded << " discarded at d_tot = one step");
   CHECK(validated + discarded >= 50);
@@ -796,26 +796,26 @@ TEST_CASE("Pending inferences a sequence break drops are reported, not lost sile
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   const int gap = per_lap + static_cast<int>(13.0 / RingWorld::kStep);
   const ChangedRingRun run = RunChangedRing({.gap_frame = gap});
-  REQUIRE(run.steps[static_cast<std::size_t>(gap - 1)].inference_pending);
+  REQUIRE(run.steps[static_cast<std::size_t>(gap - 1)].inference.pending);
   const CatGraphStep& at = run.steps[static_cast<std::size_t>(gap)];
-  REQUIRE_FALSE(at.lost.empty());
-  CHECK(at.lost_reason == DiscardReason::kSequenceBreak);
-  CHECK(at.reference_node >= 0);
+  REQUIRE_FALSE(at.inference.lost.empty());
+  CHECK(at.inference.lost_reason == DiscardReason::kSequenceBreak);
+  CHECK(at.inference.reference_node >= 0);
   // The last visual closure before the break, which they hung from.
-  REQUIRE(at.reference_node < gap);
-  CHECK(run.steps[static_cast<std::size_t>(at.reference_node)].closure);
-  for (int k = at.reference_node + 1; k < gap; ++k) CHECK_FALSE(run.steps[static_cast<std::size_t>(k)].closure);
+  REQUIRE(at.inference.reference_node < gap);
+  CHECK(run.steps[static_cast<std::size_t>(at.inference.reference_node)].closure);
+  for (int k = at.inference.reference_node + 1; k < gap; ++k) CHECK_FALSE(run.steps[static_cast<std::size_t>(k)].closure);
   int pending_before = 0;
-  for (int k = at.reference_node + 1; k < gap; ++k) pending_before += run.steps[static_cast<std::size_t>(k)].inference_pending;
-  CHECK(static_cast<int>(at.lost.size()) == pending_before);
-  for (const InferredClosure& c : at.lost) {
-    CHECK(c.node > at.reference_node);
+  for (int k = at.inference.reference_node + 1; k < gap; ++k) pending_before += run.steps[static_cast<std::size_t>(k)].inference.pending;
+  CHECK(static_cast<int>(at.inference.lost.size()) == pending_before);
+  for (const InferredClosure& c : at.inference.lost) {
+    CHECK(c.node > at.inference.reference_node);
     CHECK(c.node < gap);
   }
   // Nothing else is lost or validated from them: the next visual closure has
   // no earlier closure to hang inferences from.
   for (std::size_t k = static_cast<std::size_t>(gap) + 1; k < run.steps.size(); ++k) {
-    CHECK(run.steps[k].lost.empty());
+    CHECK(run.steps[k].inference.lost.empty());
   }
 }
 
@@ -827,7 +827,7 @@ TEST_CASE("CAT-Graph+ leaves the visual closures exactly as CAT-Graph alone make
   for (std::size_t k = 0; k < with.steps.size(); ++k) {
     CAPTURE(k);
     CheckSameVisualStep(with.steps[k], without.steps[k]);
-    CHECK(without.steps[k].inferred.empty());
+    CHECK(without.steps[k].inference.inferred.empty());
     visual += with.steps[k].closure;
   }
   CHECK(visual > 0);
@@ -863,19 +863,32 @@ AliasedRingRun RunAliasedRing(const AliasedRing& ring = {}) {
   const int per_lap = static_cast<int>(RingWorld::kCircumference / RingWorld::kStep);
   AliasedRingRun run{per_lap + 200, per_lap + 220, per_lap + 30, {}};
   for (int k = 0; k <= run.last + 20; ++k) {
-    Aliasing aliasing;
-    if (k >= run.first - ring.withheld_before && k <= run.last) aliasing.withhold_closure = true;
-    if (k == run.first || k == run.last) aliasing.false_match = k - run.back;
-    aliasing.vetoed = ring.vetoed.contains(k);
-    run.steps.push_back(filter.Step(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(),
-                                    world.Observe(k * RingWorld::kStep), aliasing));
+    ClosureOverride decision;
+    if (k >= run.first - ring.withheld_before && k <= run.last) decision.withhold = true;
+    if (k == run.first || k == run.last) decision.force_node = k - run.back;
+    decision.vetoed = ring.vetoed.contains(k);
+    const Observation z{world.Observe(k * RingWorld::kStep), {}};
+    CatGraphStep step = filter.Propose(k, 0.25 * k, k == 0 ? Pose2() : RingWorld::Step(), z);
+    filter.Commit(step, decision);
+    run.steps.push_back(std::move(step));
   }
   if (ring.vetoed.empty()) {
-    // Aliasing onto the robot's own recent frames is refused.
-    Aliasing recent;
-    recent.false_match = run.last + 15;
-    CHECK_THROWS_AS(filter.Step(run.last + 21, 0.25 * (run.last + 21), RingWorld::Step(), world.Observe(0.0), recent),
-                    std::invalid_argument);
+    // Aliasing onto the robot's own recent frames is refused, and changes
+    // nothing: the step can still be committed.
+    const int k = run.last + 21;
+    const Observation z{world.Observe(0.0), {}};
+    CatGraphStep step = filter.Propose(k, 0.25 * k, RingWorld::Step(), z);
+    CHECK_THROWS_AS(filter.Propose(k + 1, 0.25 * (k + 1), RingWorld::Step(), z), std::logic_error);
+    CHECK_THROWS_AS(filter.Commit(step, {.force_node = run.last + 15}), std::invalid_argument);
+    CatGraphStep other = step;
+    other.node = step.node - 1;
+    CHECK_THROWS_AS(filter.Commit(other), std::logic_error);
+    const std::size_t edges = filter.graph().edges().size();
+    filter.Commit(step, {.force_node = run.first - run.back});
+    CHECK(step.closure);
+    CHECK(step.matched_node == run.first - run.back);
+    CHECK(filter.graph().edges().size() == edges + 1);
+    CHECK_THROWS_AS(filter.Commit(step), std::logic_error);
   }
   return run;
 }
@@ -884,10 +897,10 @@ AliasedRingRun RunAliasedRing(const AliasedRing& ring = {}) {
 // discarded, every inference within 0.5 m of the truth, frames `from` to
 // `to` among them. Returns the frames inferred.
 std::set<int> CheckValidatedChain(const CatGraphStep& end, int reference, int from, int to) {
-  CHECK(end.reference_node == reference);
-  CHECK(end.discarded.empty());
+  CHECK(end.inference.reference_node == reference);
+  CHECK(end.inference.discarded.empty());
   std::set<int> inferred;
-  for (const InferredClosure& c : end.inferred) {
+  for (const InferredClosure& c : end.inference.inferred) {
     CAPTURE(c.node, c.matched_node);
     CHECK(RingDistance(c.node, c.matched_node) <= 0.5);
     inferred.insert(c.node);
@@ -913,9 +926,9 @@ TEST_CASE("Aliasing makes the filter take a stretch for one 3 m back and CAT-Gra
   // The second false match validates what the odometric filter inferred
   // from the first: the frames between, each 3 m off.
   const CatGraphStep& end = steps[static_cast<std::size_t>(last)];
-  CHECK(end.reference_node == first);
-  CHECK(end.inferred.size() >= 15);
-  for (const InferredClosure& c : end.inferred) {
+  CHECK(end.inference.reference_node == first);
+  CHECK(end.inference.inferred.size() >= 15);
+  for (const InferredClosure& c : end.inference.inferred) {
     CAPTURE(c.node, c.matched_node);
     CHECK(c.node > first);
     CHECK(c.node < last);
@@ -946,11 +959,11 @@ TEST_CASE("A vetoed false pair is still reported, and CAT-Graph+ carries its inf
     CHECK(s.matched_node == plain.steps[k].matched_node);
     if (vetoed.contains(static_cast<int>(k))) {
       // Neither validates, discards nor re-initialises.
-      CHECK(s.inferred.empty());
-      CHECK(s.discarded.empty());
+      CHECK(s.inference.inferred.empty());
+      CHECK(s.inference.discarded.empty());
       continue;
     }
-    CHECK_FALSE(vetoed.contains(s.reference_node));
+    CHECK_FALSE(vetoed.contains(s.inference.reference_node));
     if (s.closure && static_cast<int>(k) < run.first) reference = static_cast<int>(k);
     if (s.closure && static_cast<int>(k) > run.last && after < 0) after = static_cast<int>(k);
   }
@@ -1028,8 +1041,8 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
   INFO(failures << " false closures between the true ones at frames " << reference << " and " << after);
   // The spec: the first false closure discards the chain from `reference`.
   const CatGraphStep& met = plain.steps[static_cast<std::size_t>(plain.first)];
-  CHECK(met.reference_node == reference);
-  CHECK(met.discarded.size() >= kWithheld - 1);
+  CHECK(met.inference.reference_node == reference);
+  CHECK(met.inference.discarded.size() >= kWithheld - 1);
 
   const AliasedRingRun vetoed = RunAliasedRing({.vetoed = failing, .withheld_before = kWithheld});
   const AliasedRingRun carried = RunAliasedRing({.withheld_before = kWithheld, .total_path_retries = failures});
@@ -1038,13 +1051,13 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
     CAPTURE(k);
     const CatGraphStep &c = carried.steps[k], &v = vetoed.steps[k];
     CheckSameVisualStep(c, plain.steps[k]);
-    CHECK(c.inference_pending == v.inference_pending);
-    CHECK(c.reference_node == v.reference_node);
-    CHECK(c.discarded.size() == v.discarded.size());
-    REQUIRE(c.inferred.size() == v.inferred.size());
-    for (std::size_t i = 0; i < c.inferred.size(); ++i) {
-      CHECK(c.inferred[i].node == v.inferred[i].node);
-      CHECK(c.inferred[i].matched_node == v.inferred[i].matched_node);
+    CHECK(c.inference.pending == v.inference.pending);
+    CHECK(c.inference.reference_node == v.inference.reference_node);
+    CHECK(c.inference.discarded.size() == v.inference.discarded.size());
+    REQUIRE(c.inference.inferred.size() == v.inference.inferred.size());
+    for (std::size_t i = 0; i < c.inference.inferred.size(); ++i) {
+      CHECK(c.inference.inferred[i].node == v.inference.inferred[i].node);
+      CHECK(c.inference.inferred[i].matched_node == v.inference.inferred[i].matched_node);
     }
   }
   const std::set<int> inferred = CheckValidatedChain(carried.steps[static_cast<std::size_t>(after)], reference,
@@ -1056,14 +1069,14 @@ TEST_CASE("Carried past the closures it fails against, a chain of inferences rea
   const AliasedRingRun one_short =
       RunAliasedRing({.withheld_before = kWithheld, .total_path_retries = failures - 1});
   const CatGraphStep& cut = one_short.steps[static_cast<std::size_t>(last_failing)];
-  CHECK(cut.reference_node == reference);
+  CHECK(cut.inference.reference_node == reference);
   std::set<int> discarded, expected;
-  for (const InferredClosure& c : cut.discarded) discarded.insert(c.node);
+  for (const InferredClosure& c : cut.inference.discarded) discarded.insert(c.node);
   for (const int k : inferred) {
     if (k < last_failing) expected.insert(k);
   }
   CHECK(discarded == expected);
-  CHECK(one_short.steps[static_cast<std::size_t>(after)].reference_node != reference);
+  CHECK(one_short.steps[static_cast<std::size_t>(after)].inference.reference_node != reference);
 
   CatGraphOptions bad;
   for (const int retries : {-1, 101}) {
