@@ -17,6 +17,7 @@
 #include "backend/graph/relative_pose_error.h"
 #include "backend/initialization.h"
 #include "backend/robust_losses.h"
+#include "backend/robust_solve.h"
 
 namespace catgraph {
 namespace {
@@ -287,442 +288,470 @@ InitialGuess Initialize(PoseGraph<PoseT>& graph, InitialGuess guess, RelativePos
   return guess;
 }
 
-template <typename PoseT>
-PoseGraphOptimization Run(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options) {
-  PoseGraphOptimization out;
-  // Ends a stage: its time is the wall clock since the last stage ended.
-  auto stage_start = std::chrono::steady_clock::now();
-  auto end_stage = [&](const char* stage, int iterations) {
-    const auto now = std::chrono::steady_clock::now();
-    out.stages.push_back({stage, std::chrono::duration<double>(now - stage_start).count(), iterations});
-    stage_start = now;
-    return out.stages.back().time_s;
-  };
-  const bool switchable = options.method == RobustMethod::kSwitchable;
-  NoiseScaleEstimate noise_scale;
-  double gate_factor = 1.0;
-  if (options.gate.estimate_noise_scale && options.method != RobustMethod::kNone) {
-    noise_scale = EstimateNoiseScale(graph, options.gate.noise_scale);
-    if (noise_scale.scale >= options.gate.noise_scale_threshold) gate_factor = noise_scale.scale;
-    end_stage("noise_scale", 0);
-  }
-  const double gate = gate_factor * Gate<PoseT>(options.cost, options.gate.probability);
-  RobustLoss loss = LossFor(options, gate);
-  auto robust = [&](const Constraint<PoseT>& c) {
-    return options.robust_odometry || c.kind != ClosureKind::kOdometry;
-  };
-  const bool any_robust = options.method != RobustMethod::kNone ||
-                          std::any_of(graph.constraints.begin(), graph.constraints.end(),
-                                      [](const auto& c) { return c.switch_id.has_value(); });
-  const InitialGuess initial_guess = Initialize(
-      graph, options.initial_guess, options.cost, any_robust ? gate : std::numeric_limits<double>::infinity(),
-      [&](const Constraint<PoseT>& c) { return robust(c) || c.switch_id.has_value(); });
-  const double initial_guess_time_s = end_stage("initial_guess", 0);
-  const std::map<PoseId, Vertex<PoseT>> initial_poses = graph.vertices;
+}  // namespace
 
-  // Closures the method decides (the rest carry the file's switches).
-  const bool method_decides_any = std::any_of(graph.constraints.begin(), graph.constraints.end(),
-                                              [&](const auto& c) { return robust(c) && !c.switch_id; });
-  std::set<SwitchId> added_switches;  // the method's, as opposed to the file's
-  if (switchable) {
-    const double switch_information =
-        options.switch_prior_information > 0.0 ? options.switch_prior_information : gate;
-    const auto file_switches = graph.switches;
-    graph.AddSwitches(robust, SwitchPrior{1.0, switch_information});
-    for (const auto& [id, s] : graph.switches) {
-      if (!file_switches.contains(id)) added_switches.insert(id);
+template <typename PoseT>
+RobustSolve<PoseT>::RobustSolve(PoseGraph<PoseT> graph, const PoseGraphOptimizerOptions& options)
+    : graph_(std::move(graph)), options_(options), stage_start_(std::chrono::steady_clock::now()) {
+  Validate(options_);
+  gate_ = Gate<PoseT>(options_.cost, options_.gate.probability);
+  loss_ = LossFor(options_, gate_);
+}
+
+template <typename PoseT>
+PoseGraphOptimization RobustSolve<PoseT>::Run() {
+  ScaleGate();
+  Initialise();
+  SolveRobustly();
+  Narrow();
+  Refine();
+  Readmit();
+  return Finish();
+}
+
+template <typename PoseT>
+double RobustSolve<PoseT>::EndStage(const char* stage, int iterations) {
+  const auto now = std::chrono::steady_clock::now();
+  out_.stages.push_back({stage, std::chrono::duration<double>(now - stage_start_).count(), iterations});
+  stage_start_ = now;
+  return out_.stages.back().time_s;
+}
+
+template <typename PoseT>
+bool RobustSolve<PoseT>::IsRobust(const Constraint<PoseT>& c) const {
+  return options_.robust_odometry || c.kind != ClosureKind::kOdometry;
+}
+
+template <typename PoseT>
+double RobustSolve<PoseT>::Psi(double s) const {
+  return catgraph::Psi(s, options_.switch_function);
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::ScaleGate() {
+  if (!options_.gate.estimate_noise_scale || options_.method == RobustMethod::kNone) return;
+  out_.noise_scale = EstimateNoiseScale(graph_, options_.gate.noise_scale);
+  if (out_.noise_scale.scale >= options_.gate.noise_scale_threshold) out_.gate_factor = out_.noise_scale.scale;
+  gate_ = out_.gate_factor * Gate<PoseT>(options_.cost, options_.gate.probability);
+  loss_ = LossFor(options_, gate_);
+  EndStage("noise_scale", 0);
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::Initialise() {
+  const bool any_robust = options_.method != RobustMethod::kNone ||
+                          std::any_of(graph_.constraints.begin(), graph_.constraints.end(),
+                                      [](const auto& c) { return c.switch_id.has_value(); });
+  out_.initial_guess = Initialize(
+      graph_, options_.initial_guess, options_.cost, any_robust ? gate_ : std::numeric_limits<double>::infinity(),
+      [&](const Constraint<PoseT>& c) { return IsRobust(c) || c.switch_id.has_value(); });
+  out_.initial_guess_time_s = EndStage("initial_guess", 0);
+  initial_poses_ = graph_.vertices;
+
+  method_decides_any_ = std::any_of(graph_.constraints.begin(), graph_.constraints.end(),
+                                    [&](const auto& c) { return IsRobust(c) && !c.switch_id; });
+  if (options_.method == RobustMethod::kSwitchable) {
+    const double information = options_.switch_prior_information > 0.0 ? options_.switch_prior_information : gate_;
+    const auto file_switches = graph_.switches;
+    graph_.AddSwitches([this](const Constraint<PoseT>& c) { return IsRobust(c); }, SwitchPrior{1.0, information});
+    for (const auto& [id, s] : graph_.switches) {
+      if (!file_switches.contains(id)) added_switches_.insert(id);
     }
   }
-
-  // Closure -> switch, for the coupled switches; the disabled closures'
-  // switches. Closures held off are left out of a solve: the disabled ones,
-  // and in the narrowed solve the ones the first rejected, whose switches
-  // are then held at their values (`frozen_switches`).
-  std::map<ClosureId, SwitchId> switch_of;
-  std::set<SwitchId> disabled_switches, frozen_switches;
-  std::set<ClosureId> held_off = options.disabled_closures;
+  held_off_ = options_.disabled_closures;
   std::size_t disabled_found = 0;
-  for (const auto& c : graph.constraints) {
-    const bool disabled = options.disabled_closures.contains(c.id);
+  for (const auto& c : graph_.constraints) {
+    const bool disabled = options_.disabled_closures.contains(c.id);
     disabled_found += disabled ? 1 : 0;
     if (!c.switch_id) continue;
-    switch_of.emplace(c.id, *c.switch_id);
+    switch_of_.emplace(c.id, *c.switch_id);
     if (disabled) {
-      disabled_switches.insert(*c.switch_id);
-      graph.switches.at(*c.switch_id).value = 0.0;
+      disabled_switches_.insert(*c.switch_id);
+      graph_.switches.at(*c.switch_id).value = 0.0;
     }
   }
-  if (disabled_found != options.disabled_closures.size()) {
+  if (disabled_found != options_.disabled_closures.size()) {
     throw std::invalid_argument("disabled_closures: " +
-                                std::to_string(options.disabled_closures.size() - disabled_found) +
+                                std::to_string(options_.disabled_closures.size() - disabled_found) +
                                 " of them are not closures of the graph");
   }
-  std::map<ClosureId, std::vector<SwitchId>> coupled_switches;
-  auto switch_of_closure = [&switch_of](ClosureId id) {
-    const auto found = switch_of.find(id);
-    if (found == switch_of.end()) {
+  auto switch_of_closure = [this](ClosureId id) {
+    const auto found = switch_of_.find(id);
+    if (found == switch_of_.end()) {
       throw std::invalid_argument("coupled_closures: closure " + std::to_string(id.value()) +
                                   " has no switch (coupled switches need method switchable)");
     }
     return found->second;
   };
-  for (const auto& [child, others] : options.coupled_closures) {
+  for (const auto& [child, others] : options_.coupled_closures) {
     switch_of_closure(child);
-    for (const ClosureId other : others) coupled_switches[child].push_back(switch_of_closure(other));
+    for (const ClosureId other : others) coupled_switches_[child].push_back(switch_of_closure(other));
   }
-  auto psi = [&options](double s) { return Psi(s, options.switch_function); };
 
-  // The poses and the gauge, shared by the robust solve and the refinement.
-  auto add_poses = [&graph](FactorGraph& factors, Values& values,
-                            const std::map<PoseId, Vertex<PoseT>>& poses) {
-    for (const auto& [id, v] : poses) {
-      values.Insert(id, *v.pose);
-      if (v.fixed) factors.SetConstant(PoseKey(id));
-    }
-    if (std::none_of(graph.vertices.begin(), graph.vertices.end(),
-                     [](const auto& v) { return v.second.fixed; })) {
-      factors.SetConstant(PoseKey(graph.vertices.begin()->first));  // gauge
-    }
-  };
-  auto take_poses = [&graph](const Values& values) {
-    for (auto& [id, v] : graph.vertices) {
-      if constexpr (std::is_same_v<PoseT, Pose2>) {
-        v.pose = values.AtPose2(id);
-      } else {
-        v.pose = values.AtPose3(id);
-      }
-    }
-  };
-
-  auto take_solution = [&](const Values& values) {
-    take_poses(values);
-    for (auto& [id, s] : graph.switches) {
-      if (!disabled_switches.contains(id) && !frozen_switches.contains(id)) s.value = values.AtSwitch(id);
-    }
-  };
-  // The robust solve's stop test (RefinementOptions::stop_when_settled),
-  // set below where the decisions are defined.
-  std::function<bool(const Values&, double)> settled;
-
-  // One solve of the whole graph; `gnc_weights`, when given, scales each
-  // robust closure's chi2 (a zero weight leaves the closure out).
-  auto solve = [&](const std::map<ClosureId, double>* gnc_weights, int max_iterations) {
-    Values initial;
-    FactorGraph factors;
-    add_poses(factors, initial, graph.vertices);
-    for (const auto& [id, s] : graph.switches) {
-      if (disabled_switches.contains(id)) continue;
-      initial.Insert(id, s.value);
-      if (frozen_switches.contains(id)) {
-        factors.SetConstant(SwitchKey(id));  // a coupled closure may still read it
-      } else if (s.prior) {
-        factors.Emplace<SwitchPriorFactor>(id, *s.prior);
-      }
-    }
-    for (const auto& c : graph.constraints) {
-      if (held_off.contains(c.id)) continue;
-      if (c.switch_id) {
-        const auto coupled = coupled_switches.find(c.id);
-        factors.Emplace<SwitchableBetweenFactor<PoseT>>(
-            c.from, c.to, *c.switch_id, c.measurement, options.switch_function,
-            coupled == coupled_switches.end() ? std::vector<SwitchId>{} : coupled->second, options.cost);
-        continue;
-      }
-      RobustLoss edge_loss = robust(c) ? loss : RobustLoss{};
-      if (gnc_weights && robust(c)) {
-        const double w = gnc_weights->at(c.id);
-        if (w == 0.0) continue;
-        edge_loss = {RobustLoss::Type::kScaled, w};
-      }
-      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, edge_loss, options.cost);
-    }
-    OptimizerOptions solver = options.solver;
-    solver.max_iterations = std::min(solver.max_iterations, max_iterations);
-    if (!gnc_weights) solver.stop_test = settled;
-    OptimizationResult solved = Optimize(factors, initial, solver);
-    take_solution(solved.values);
-    if (solved.summary.stopped_by_test) {
-      std::ostringstream message;
-      message << "decisions settled: none changed over the last " << options.refinement.settled_iterations
-              << " iterations, and the last lowered the cost by less than " << options.refinement.settled_decrease
-              << " (relative); the refinement re-solves the map";
-      solved.summary.message = message.str();
-    }
-    return solved.summary;
-  };
-
-  // The robust solve at the gate g, over the closures not held off.
-  std::map<ClosureId, double> gnc_weights;
-  auto solve_robustly = [&](double g) {
-    loss = LossFor(options, g);
-    if (options.method != RobustMethod::kGnc) return solve(nullptr, options.solver.max_iterations);
-    gnc_weights.clear();
-    for (const auto& c : graph.constraints) {
-      if (!c.switch_id && robust(c) && !held_off.contains(c.id)) gnc_weights[c.id] = 1.0;
-    }
-    return SolveGnc(graph, options, g, gnc_weights, solve);
-  };
-
-  // What the last solve decided about loop closure c.
-  auto decide_one = [&](const Constraint<PoseT>& c) {
-    ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, 1.0, true};
-    bool coupled_on = true;  // every coupled switch above 0.5
-    double own = 1.0;        // the closure's own switch or loss weight
-    if (options.disabled_closures.contains(c.id)) {
-      d.weight = own = 0.0;
-    } else if (c.switch_id) {
-      own = psi(graph.switches.at(*c.switch_id).value);
-      d.weight = own;
-      if (const auto coupled = coupled_switches.find(c.id); coupled != coupled_switches.end()) {
-        for (const SwitchId other : coupled->second) {
-          const double w = psi(graph.switches.at(other).value);
-          coupled_on = coupled_on && w > 0.5;
-          d.weight *= w;
-        }
-      }
-    } else if (options.method == RobustMethod::kGnc && robust(c)) {
-      d.weight = gnc_weights.at(c.id);
-    } else if (robust(c)) {
-      d.weight = std::sqrt(LossDerivative(loss, EdgeCost(graph, c, options.cost)));
-    }
-    if (!c.switch_id) own = d.weight;
-    d.own_weight = own;
-    d.accepted = own > 0.5 && coupled_on;
-    return d;
-  };
-  // ... about every loop closure, in graph order; where `kept` (the first
-  // solve's decisions) rejected one, that decision.
-  auto decide_all = [&](const std::vector<ClosureDecision>* kept) {
-    std::vector<ClosureDecision> decisions;
-    for (const auto& c : graph.constraints) {
-      if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
-      if (kept && !(*kept)[decisions.size()].accepted) {
-        decisions.push_back((*kept)[decisions.size()]);
-        continue;
-      }
-      decisions.push_back(decide_one(c));
-    }
-    return decisions;
-  };
-
-  // Each solve runs its own copy of the test, which starts with no history.
-  const bool robust_solve = options.method != RobustMethod::kNone || !graph.switches.empty();
-  if (options.refinement.stop_when_settled && options.refinement.enabled && robust_solve && options.method != RobustMethod::kGnc) {
-    settled = [&, last = std::vector<bool>{}, unchanged = 0](const Values& values,
-                                                            double decrease) mutable {
-      take_solution(values);
+  robust_solve_ = options_.method != RobustMethod::kNone || !graph_.switches.empty();
+  if (options_.refinement.stop_when_settled && options_.refinement.enabled && robust_solve_ &&
+      options_.method != RobustMethod::kGnc) {
+    // Each solve runs its own copy of the test, which starts with no history.
+    settled_ = [this, last = std::vector<bool>{}, unchanged = 0](const Values& values, double decrease) mutable {
+      TakeSolution(values);
       std::vector<bool> accepted;
-      for (const ClosureDecision& d : decide_all(nullptr)) accepted.push_back(d.accepted);
+      for (const ClosureDecision& d : DecideAll(nullptr)) accepted.push_back(d.accepted);
       unchanged = accepted == last ? unchanged + 1 : 0;
       last = std::move(accepted);
-      return unchanged >= options.refinement.settled_iterations && decrease < options.refinement.settled_decrease;
+      return unchanged >= options_.refinement.settled_iterations && decrease < options_.refinement.settled_decrease;
     };
   }
+}
 
-  out.summary = solve_robustly(gate);
-  out.closures = decide_all(nullptr);
-  end_stage("robust_solve", out.summary.iterations);
-
-  // Narrowing (GateOptions::narrow): the accepted
-  // closures' own cycles measure the noise again; when it is Gaussian and
-  // the information overstates it, they are decided again at the calibrated
-  // family-wise gate, from the first solve's poses, the rejected ones held
-  // off as they are.
-  if (NarrowsGate(options) && method_decides_any && out.summary.IsUsable()) {
-    const std::set<ClosureId> rejected = RejectedIds(out.closures);
-    const std::size_t tested = out.closures.size() - rejected.size();
-    out.inlier_noise_scale = EstimateNoiseScale(graph, options.gate.noise_scale, rejected);
-    const NoiseScaleEstimate& inliers = out.inlier_noise_scale;
-    const double narrowed =
-        tested == 0 ? gate
-                    : inliers.upper_scale *
-                          Gate<PoseT>(options.cost, 1.0 - (1.0 - options.gate.probability) /
-                                                              static_cast<double>(tested));
-    if (inliers.cycles >= options.gate.narrow_min_cycles &&
-        inliers.upper_scale <= options.gate.narrow_max_tail_ratio * inliers.scale &&
-        narrowed * options.gate.noise_scale_threshold <= gate) {
-      const auto first_vertices = graph.vertices;
-      const auto first_switches = graph.switches;
-      for (const ClosureId id : rejected) {
-        held_off.insert(id);
-        if (const auto s = switch_of.find(id); s != switch_of.end()) frozen_switches.insert(s->second);
-      }
-      for (const SwitchId id : added_switches) {
-        if (frozen_switches.contains(id) || disabled_switches.contains(id)) continue;
-        SwitchVariable& s = graph.switches.at(id);
-        s.value = 1.0;
-        s.prior->information = narrowed;
-      }
-      out.narrowed = solve_robustly(narrowed);
-      std::vector<ClosureDecision> second;
-      if (out.narrowed->IsUsable()) {
-        second = decide_all(&out.closures);
-        for (const ClosureDecision& d : second) out.narrow_newly_rejected += d.accepted ? 0 : 1;
-        out.narrow_newly_rejected -= rejected.size();
-      }
-      if (out.narrowed->IsUsable() &&
-          static_cast<double>(out.narrow_newly_rejected) <=
-              options.gate.narrow_max_rejected_share * static_cast<double>(tested)) {
-        out.narrow_factor = narrowed / gate;
-        out.closures = std::move(second);
-      } else {
-        graph.vertices = first_vertices;  // the first solve's result stands
-        graph.switches = first_switches;
-      }
-    }
-    end_stage("narrow", out.narrowed ? out.narrowed->iterations : 0);
+template <typename PoseT>
+void RobustSolve<PoseT>::AddPoses(FactorGraph& factors, Values& values, const Poses& poses) const {
+  for (const auto& [id, v] : poses) {
+    values.Insert(id, *v.pose);
+    if (v.fixed) factors.SetConstant(PoseKey(id));
   }
-  out.initial_guess = initial_guess;
-  out.initial_guess_time_s = initial_guess_time_s;
-  out.noise_scale = noise_scale;
-  out.gate_factor = gate_factor;
+  if (std::none_of(graph_.vertices.begin(), graph_.vertices.end(), [](const auto& v) { return v.second.fixed; })) {
+    factors.SetConstant(PoseKey(graph_.vertices.begin()->first));  // gauge
+  }
+}
 
-  // The map of the odometry and the accepted closures at full weight, as
-  // factors over the graph's poses.
-  auto map_factors = [&](FactorGraph& factors, Values& values, const std::map<PoseId, Vertex<PoseT>>& poses) {
-    add_poses(factors, values, poses);
-    const std::set<ClosureId> rejected = RejectedIds(out.closures);
-    for (const auto& c : graph.constraints) {
-      if (rejected.contains(c.id)) continue;
-      factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options.cost);
+template <typename PoseT>
+void RobustSolve<PoseT>::TakePoses(const Values& values) {
+  for (auto& [id, v] : graph_.vertices) {
+    if constexpr (std::is_same_v<PoseT, Pose2>) {
+      v.pose = values.AtPose2(id);
+    } else {
+      v.pose = values.AtPose3(id);
     }
+  }
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::TakeSolution(const Values& values) {
+  TakePoses(values);
+  for (auto& [id, s] : graph_.switches) {
+    if (!disabled_switches_.contains(id) && !frozen_switches_.contains(id)) s.value = values.AtSwitch(id);
+  }
+}
+
+template <typename PoseT>
+Summary RobustSolve<PoseT>::Solve(const std::map<ClosureId, double>* gnc_weights, int max_iterations) {
+  Values initial;
+  FactorGraph factors;
+  AddPoses(factors, initial, graph_.vertices);
+  for (const auto& [id, s] : graph_.switches) {
+    if (disabled_switches_.contains(id)) continue;
+    initial.Insert(id, s.value);
+    if (frozen_switches_.contains(id)) {
+      factors.SetConstant(SwitchKey(id));  // a coupled closure may still read it
+    } else if (s.prior) {
+      factors.Emplace<SwitchPriorFactor>(id, *s.prior);
+    }
+  }
+  for (const auto& c : graph_.constraints) {
+    if (held_off_.contains(c.id)) continue;
+    if (c.switch_id) {
+      const auto coupled = coupled_switches_.find(c.id);
+      factors.Emplace<SwitchableBetweenFactor<PoseT>>(
+          c.from, c.to, *c.switch_id, c.measurement, options_.switch_function,
+          coupled == coupled_switches_.end() ? std::vector<SwitchId>{} : coupled->second, options_.cost);
+      continue;
+    }
+    RobustLoss edge_loss = IsRobust(c) ? loss_ : RobustLoss{};
+    if (gnc_weights && IsRobust(c)) {
+      const double w = gnc_weights->at(c.id);
+      if (w == 0.0) continue;
+      edge_loss = {RobustLoss::Type::kScaled, w};
+    }
+    factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, edge_loss, options_.cost);
+  }
+  OptimizerOptions solver = options_.solver;
+  solver.max_iterations = std::min(solver.max_iterations, max_iterations);
+  if (!gnc_weights) solver.stop_test = settled_;
+  OptimizationResult solved = Optimize(factors, initial, solver);
+  TakeSolution(solved.values);
+  if (solved.summary.stopped_by_test) {
+    std::ostringstream message;
+    message << "decisions settled: none changed over the last " << options_.refinement.settled_iterations
+            << " iterations, and the last lowered the cost by less than " << options_.refinement.settled_decrease
+            << " (relative); the refinement re-solves the map";
+    solved.summary.message = message.str();
+  }
+  return solved.summary;
+}
+
+template <typename PoseT>
+Summary RobustSolve<PoseT>::SolveAtGate(double g) {
+  loss_ = LossFor(options_, g);
+  if (options_.method != RobustMethod::kGnc) return Solve(nullptr, options_.solver.max_iterations);
+  gnc_weights_.clear();
+  for (const auto& c : graph_.constraints) {
+    if (!c.switch_id && IsRobust(c) && !held_off_.contains(c.id)) gnc_weights_[c.id] = 1.0;
+  }
+  auto solve = [this](const std::map<ClosureId, double>* weights, int max_iterations) {
+    return Solve(weights, max_iterations);
   };
-  // Refinement: the decisions stand; the poses are re-solved by plain least
-  // squares over the odometry and the accepted closures at full weight, so
-  // that the residual pull of rejected closures (weight up to 0.5) and the
-  // down-weighting of accepted ones leave no bias in the map. It starts from
-  // the robust solution and, with `from_initial_guess`, from the initial
-  // guess too, and keeps the lower cost: a method that decides right on a
-  // map its early rounds folded (GNC after a least-squares start among
-  // outliers) ends in a poor local minimum, which the initial guess avoids.
-  auto refine = [&](bool from_initial_guess) {
-    std::optional<OptimizationResult> best;
-    Summary times;  // of every start
-    std::optional<Summary> failed;
-    using Poses = std::map<PoseId, Vertex<PoseT>>;
-    std::vector<const Poses*> starts = {&graph.vertices};
-    if (from_initial_guess) starts.push_back(&initial_poses);
-    for (const Poses* start_poses : starts) {
-      Values start;
-      FactorGraph factors;
-      map_factors(factors, start, *start_poses);
-      OptimizationResult refined = Optimize(factors, start, options.solver);
-      times.AddTimes(refined.summary);
-      if (refined.summary.IsUsable() && (!best || refined.summary.final_cost < best->summary.final_cost)) {
-        best = std::move(refined);
-      } else if (!best && !failed) {
-        failed = refined.summary;  // reported if no start succeeds
-      }
-    }
-    Summary summary = best ? best->summary : *failed;
-    if (best) take_poses(best->values);
-    summary.SetTimes(times);
-    return summary;
-  };
-  if (options.refinement.enabled && robust_solve && out.summary.IsUsable()) {
-    // With nothing rejected, the robust solve ran from the initial guess
-    // with every closure near full weight, the refinement's own problem: a
-    // second start from the initial guess ends where the first does.
-    out.refinement = refine(/*from_initial_guess=*/!RejectedIds(out.closures).empty());
-    end_stage("refine", out.refinement->iterations);
-  }
+  return SolveGnc(graph_, options_, g, gnc_weights_, solve);
+}
 
-  // Readmission (ReadmissionOptions): each closure the
-  // method rejected is tested once more against the refined map, by its
-  // innovation (the map's own uncertainty counted) at the family-wise gate;
-  // those that pass are accepted and the map refined again, and the rest
-  // tested against that map, until none passes (at most kReadmitRounds).
-  if (options.readmission.enabled && DecidesAtGate(options) && options.cost == RelativePoseCostType::kG2o &&
-      !out.narrowed && out.refinement && out.refinement->IsUsable()) {
-    constexpr int kReadmitRounds = 3;
-    std::map<ClosureId, const Constraint<PoseT>*> constraint_of;
-    for (const auto& c : graph.constraints) constraint_of.emplace(c.id, &c);
-    auto by_method = [&](const ClosureDecision& d) {
-      const Constraint<PoseT>& c = *constraint_of.at(d.id);
-      return robust(c) && (!c.switch_id || added_switches.contains(*c.switch_id)) &&
-             !options.disabled_closures.contains(d.id);
-    };
-    // The family-wise gate for the n closures the method decided.
-    const auto decided = std::count_if(out.closures.begin(), out.closures.end(), by_method);
-    const double family_gate =
-        decided == 0 ? 0.0
-                     : gate_factor * Gate<PoseT>(options.cost, 1.0 - (1.0 - options.gate.probability) /
-                                                                      static_cast<double>(decided));
-    // Rejected by its own weight, with every coupled switch on.
-    auto rejected_by_itself = [&](const ClosureDecision& d) {
-      if (d.accepted || d.own_weight > 0.5) return false;
-      const auto coupled = coupled_switches.find(d.id);
-      return coupled == coupled_switches.end() ||
-             std::all_of(coupled->second.begin(), coupled->second.end(),
-                         [&](SwitchId s) { return psi(graph.switches.at(s).value) > 0.5; });
-    };
-    Summary times;  // of the refinements
-    int iterations = 0;
-    for (int round = 0; round < kReadmitRounds; ++round) {
-      std::vector<ClosureDecision*> candidates;
-      std::vector<const Constraint<PoseT>*> tested;
-      for (ClosureDecision& d : out.closures) {
-        if (!rejected_by_itself(d) || !by_method(d)) continue;
-        candidates.push_back(&d);
-        tested.push_back(constraint_of.at(d.id));
+template <typename PoseT>
+ClosureDecision RobustSolve<PoseT>::Decide(const Constraint<PoseT>& c) const {
+  ClosureDecision d{c.id, c.from, c.to, c.kind, 1.0, 1.0, true};
+  bool coupled_on = true;  // every coupled switch above 0.5
+  double own = 1.0;        // the closure's own switch or loss weight
+  if (options_.disabled_closures.contains(c.id)) {
+    d.weight = own = 0.0;
+  } else if (c.switch_id) {
+    own = Psi(graph_.switches.at(*c.switch_id).value);
+    d.weight = own;
+    if (const auto coupled = coupled_switches_.find(c.id); coupled != coupled_switches_.end()) {
+      for (const SwitchId other : coupled->second) {
+        const double w = Psi(graph_.switches.at(other).value);
+        coupled_on = coupled_on && w > 0.5;
+        d.weight *= w;
       }
-      if (candidates.empty()) break;
-      const auto start = std::chrono::steady_clock::now();
-      Values values;
-      FactorGraph map;
-      map_factors(map, values, graph.vertices);
-      std::vector<double> nis;
-      try {
-        nis = InnovationChi2<PoseT>(map, values, tested);
-      } catch (const std::runtime_error&) {
-        // The accepted closures leave the map undetermined: nothing to test against.
-      }
-      out.readmit_test_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::vector<ClosureDecision*> passed;
-      for (std::size_t i = 0; i < nis.size(); ++i) {
-        if (nis[i] <= family_gate) passed.push_back(candidates[i]);
-      }
-      if (passed.empty()) break;
-      const auto decisions_before = out.closures;
-      const auto switches_before = graph.switches;
-      const auto vertices_before = graph.vertices;
-      for (ClosureDecision* d : passed) {
-        d->accepted = d->readmitted = true;
-        d->weight = d->own_weight = 1.0;
-        if (const auto s = switch_of.find(d->id); s != switch_of.end()) graph.switches.at(s->second).value = 1.0;
-      }
-      Summary refined = refine(false);
-      times.AddTimes(refined);
-      iterations += refined.iterations;
-      if (!refined.IsUsable()) {  // the last map and its decisions stand
-        out.closures = decisions_before;
-        graph.switches = switches_before;
-        graph.vertices = vertices_before;
-        break;
-      }
-      out.readmitted += passed.size();
-      out.readmission = refined;
     }
-    if (out.readmission) out.readmission->SetTimes(times);
-    end_stage("readmit", iterations);
+  } else if (options_.method == RobustMethod::kGnc && IsRobust(c)) {
+    d.weight = gnc_weights_.at(c.id);
+  } else if (IsRobust(c)) {
+    d.weight = std::sqrt(LossDerivative(loss_, EdgeCost(graph_, c, options_.cost)));
   }
-  for (const ClosureDecision& d : out.closures) (d.accepted ? out.accepted : out.rejected) += 1;
+  if (!c.switch_id) own = d.weight;
+  d.own_weight = own;
+  d.accepted = own > 0.5 && coupled_on;
+  return d;
+}
+
+template <typename PoseT>
+std::vector<ClosureDecision> RobustSolve<PoseT>::DecideAll(const std::vector<ClosureDecision>* kept) const {
+  std::vector<ClosureDecision> decisions;
+  for (const auto& c : graph_.constraints) {
+    if (c.kind == ClosureKind::kOdometry && !c.switch_id) continue;
+    if (kept && !(*kept)[decisions.size()].accepted) {
+      decisions.push_back((*kept)[decisions.size()]);
+      continue;
+    }
+    decisions.push_back(Decide(c));
+  }
+  return decisions;
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::SolveRobustly() {
+  out_.summary = SolveAtGate(gate_);
+  out_.closures = DecideAll(nullptr);
+  EndStage("robust_solve", out_.summary.iterations);
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::Narrow() {
+  // The accepted closures' own cycles measure the noise again; when it is
+  // Gaussian and the information overstates it, they are decided again at
+  // the calibrated family-wise gate, from the first solve's poses, the
+  // rejected ones held off as they are (GateOptions::narrow).
+  if (!NarrowsGate(options_) || !method_decides_any_ || !out_.summary.IsUsable()) return;
+  const GateOptions& o = options_.gate;
+  const std::set<ClosureId> rejected = RejectedIds(out_.closures);
+  const std::size_t tested = out_.closures.size() - rejected.size();
+  out_.inlier_noise_scale = EstimateNoiseScale(graph_, o.noise_scale, rejected);
+  const NoiseScaleEstimate& inliers = out_.inlier_noise_scale;
+  const double narrowed =
+      tested == 0 ? gate_
+                  : inliers.upper_scale *
+                        Gate<PoseT>(options_.cost, 1.0 - (1.0 - o.probability) / static_cast<double>(tested));
+  if (inliers.cycles >= o.narrow_min_cycles && inliers.upper_scale <= o.narrow_max_tail_ratio * inliers.scale &&
+      narrowed * o.noise_scale_threshold <= gate_) {
+    const auto first_vertices = graph_.vertices;
+    const auto first_switches = graph_.switches;
+    for (const ClosureId id : rejected) {
+      held_off_.insert(id);
+      if (const auto s = switch_of_.find(id); s != switch_of_.end()) frozen_switches_.insert(s->second);
+    }
+    for (const SwitchId id : added_switches_) {
+      if (frozen_switches_.contains(id) || disabled_switches_.contains(id)) continue;
+      SwitchVariable& s = graph_.switches.at(id);
+      s.value = 1.0;
+      s.prior->information = narrowed;
+    }
+    out_.narrowed = SolveAtGate(narrowed);
+    std::vector<ClosureDecision> second;
+    if (out_.narrowed->IsUsable()) {
+      second = DecideAll(&out_.closures);
+      for (const ClosureDecision& d : second) out_.narrow_newly_rejected += d.accepted ? 0 : 1;
+      out_.narrow_newly_rejected -= rejected.size();
+    }
+    if (out_.narrowed->IsUsable() &&
+        static_cast<double>(out_.narrow_newly_rejected) <= o.narrow_max_rejected_share * static_cast<double>(tested)) {
+      out_.narrow_factor = narrowed / gate_;
+      out_.closures = std::move(second);
+    } else {
+      graph_.vertices = first_vertices;  // the first solve's result stands
+      graph_.switches = first_switches;
+    }
+  }
+  EndStage("narrow", out_.narrowed ? out_.narrowed->iterations : 0);
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::AddMap(FactorGraph& factors, Values& values, const Poses& poses) const {
+  AddPoses(factors, values, poses);
+  const std::set<ClosureId> rejected = RejectedIds(out_.closures);
+  for (const auto& c : graph_.constraints) {
+    if (rejected.contains(c.id)) continue;
+    factors.Emplace<BetweenFactor<PoseT>>(c.from, c.to, c.measurement, RobustLoss{}, options_.cost);
+  }
+}
+
+template <typename PoseT>
+Summary RobustSolve<PoseT>::RefineFrom(bool from_initial_guess) {
+  std::optional<OptimizationResult> best;
+  Summary times;  // of every start
+  std::optional<Summary> failed;
+  std::vector<const Poses*> starts = {&graph_.vertices};
+  if (from_initial_guess) starts.push_back(&initial_poses_);
+  for (const Poses* start_poses : starts) {
+    Values start;
+    FactorGraph factors;
+    AddMap(factors, start, *start_poses);
+    OptimizationResult refined = Optimize(factors, start, options_.solver);
+    times.AddTimes(refined.summary);
+    if (refined.summary.IsUsable() && (!best || refined.summary.final_cost < best->summary.final_cost)) {
+      best = std::move(refined);
+    } else if (!best && !failed) {
+      failed = refined.summary;  // reported if no start succeeds
+    }
+  }
+  Summary summary = best ? best->summary : *failed;
+  if (best) TakePoses(best->values);
+  summary.SetTimes(times);
+  return summary;
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::Refine() {
+  // The decisions stand; the poses are re-solved by plain least squares over
+  // the odometry and the accepted closures at full weight, so that the
+  // residual pull of rejected closures (weight up to 0.5) and the
+  // down-weighting of accepted ones leave no bias in the map. It starts
+  // from the robust solution and, when the robust solve rejected any
+  // closure, from the initial guess too, and keeps the lower cost: a method
+  // that decides right on a map its early rounds folded (GNC after a
+  // least-squares start among outliers) ends in a poor local minimum, which
+  // the initial guess avoids. With nothing rejected, the robust solve ran
+  // from the initial guess with every closure near full weight, the
+  // refinement's own problem: a second start ends where the first does.
+  if (!options_.refinement.enabled || !robust_solve_ || !out_.summary.IsUsable()) return;
+  out_.refinement = RefineFrom(/*from_initial_guess=*/!RejectedIds(out_.closures).empty());
+  EndStage("refine", out_.refinement->iterations);
+}
+
+template <typename PoseT>
+void RobustSolve<PoseT>::Readmit() {
+  // Each closure the method rejected is tested once more against the
+  // refined map, by its innovation (the map's own uncertainty counted) at
+  // the family-wise gate; those that pass are accepted and the map refined
+  // again, and the rest tested against that map, until none passes (at
+  // most kRounds) (ReadmissionOptions).
+  if (!options_.readmission.enabled || !DecidesAtGate(options_) || options_.cost != RelativePoseCostType::kG2o ||
+      out_.narrowed || !out_.refinement || !out_.refinement->IsUsable()) {
+    return;
+  }
+  constexpr int kRounds = 3;
+  std::map<ClosureId, const Constraint<PoseT>*> constraint_of;
+  for (const auto& c : graph_.constraints) constraint_of.emplace(c.id, &c);
+  auto by_method = [&](const ClosureDecision& d) {
+    const Constraint<PoseT>& c = *constraint_of.at(d.id);
+    return IsRobust(c) && (!c.switch_id || added_switches_.contains(*c.switch_id)) &&
+           !options_.disabled_closures.contains(d.id);
+  };
+  // The family-wise gate for the n closures the method decided.
+  const auto decided = std::count_if(out_.closures.begin(), out_.closures.end(), by_method);
+  const double family_gate =
+      decided == 0 ? 0.0
+                   : out_.gate_factor * Gate<PoseT>(options_.cost, 1.0 - (1.0 - options_.gate.probability) /
+                                                                          static_cast<double>(decided));
+  // Rejected by its own weight, with every coupled switch on.
+  auto rejected_by_itself = [&](const ClosureDecision& d) {
+    if (d.accepted || d.own_weight > 0.5) return false;
+    const auto coupled = coupled_switches_.find(d.id);
+    return coupled == coupled_switches_.end() ||
+           std::all_of(coupled->second.begin(), coupled->second.end(),
+                       [&](SwitchId s) { return Psi(graph_.switches.at(s).value) > 0.5; });
+  };
+  Summary times;  // of the refinements
+  int iterations = 0;
+  for (int round = 0; round < kRounds; ++round) {
+    std::vector<ClosureDecision*> candidates;
+    std::vector<const Constraint<PoseT>*> tested;
+    for (ClosureDecision& d : out_.closures) {
+      if (!rejected_by_itself(d) || !by_method(d)) continue;
+      candidates.push_back(&d);
+      tested.push_back(constraint_of.at(d.id));
+    }
+    if (candidates.empty()) break;
+    const auto start = std::chrono::steady_clock::now();
+    Values values;
+    FactorGraph map;
+    AddMap(map, values, graph_.vertices);
+    std::vector<double> nis;
+    try {
+      nis = InnovationChi2<PoseT>(map, values, tested);
+    } catch (const std::runtime_error&) {
+      // The accepted closures leave the map undetermined: nothing to test against.
+    }
+    out_.readmit_test_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::vector<ClosureDecision*> passed;
+    for (std::size_t i = 0; i < nis.size(); ++i) {
+      if (nis[i] <= family_gate) passed.push_back(candidates[i]);
+    }
+    if (passed.empty()) break;
+    const auto decisions_before = out_.closures;
+    const auto switches_before = graph_.switches;
+    const auto vertices_before = graph_.vertices;
+    for (ClosureDecision* d : passed) {
+      d->accepted = d->readmitted = true;
+      d->weight = d->own_weight = 1.0;
+      if (const auto s = switch_of_.find(d->id); s != switch_of_.end()) graph_.switches.at(s->second).value = 1.0;
+    }
+    Summary refined = RefineFrom(false);
+    times.AddTimes(refined);
+    iterations += refined.iterations;
+    if (!refined.IsUsable()) {  // the last map and its decisions stand
+      out_.closures = decisions_before;
+      graph_.switches = switches_before;
+      graph_.vertices = vertices_before;
+      break;
+    }
+    out_.readmitted += passed.size();
+    out_.readmission = refined;
+  }
+  if (out_.readmission) out_.readmission->SetTimes(times);
+  EndStage("readmit", iterations);
+}
+
+template <typename PoseT>
+PoseGraphOptimization RobustSolve<PoseT>::Finish() {
+  for (const ClosureDecision& d : out_.closures) (d.accepted ? out_.accepted : out_.rejected) += 1;
   // The decisions travel with the graph, so that a reader of the written
   // file counts a closure as this solve did.
-  if (options.method != RobustMethod::kNone) {
+  if (options_.method != RobustMethod::kNone) {
     std::map<ClosureId, RobustDecision> decided;
-    for (const ClosureDecision& d : out.closures) decided.emplace(d.id, RobustDecision{d.accepted, d.weight});
-    for (auto& c : graph.constraints) {
+    for (const ClosureDecision& d : out_.closures) decided.emplace(d.id, RobustDecision{d.accepted, d.weight});
+    for (auto& c : graph_.constraints) {
       const auto it = decided.find(c.id);
       c.decision = it == decided.end() ? std::nullopt : std::optional<RobustDecision>(it->second);
     }
   }
-  out.chi2 = GraphChi2(graph);
-  out.chordal_cost = GraphChordalCost(graph);
-  out.graph = std::move(graph);
-  end_stage("costs", 0);
-  return out;
+  out_.chi2 = GraphChi2(graph_);
+  out_.chordal_cost = GraphChordalCost(graph_);
+  out_.graph = std::move(graph_);
+  EndStage("costs", 0);
+  return std::move(out_);
 }
+
+template class RobustSolve<Pose2>;
+template class RobustSolve<Pose3>;
+
+namespace {
 
 template <typename PoseT>
 PoseGraph<PoseT> Drop(PoseGraph<PoseT> graph, const std::vector<ClosureDecision>& decisions) {
@@ -787,8 +816,12 @@ void Validate(const PoseGraphOptimizerOptions& o) {
 
 PoseGraphOptimization OptimizePoseGraph(const AnyPoseGraph& graph,
                                         const PoseGraphOptimizerOptions& options) {
-  Validate(options);
-  return std::visit([&](const auto& g) { return Run(g, options); }, graph);
+  return std::visit(
+      [&](const auto& g) {
+        using PoseT = typename std::decay_t<decltype(g)>::Pose;
+        return RobustSolve<PoseT>(g, options).Run();
+      },
+      graph);
 }
 
 double PoseGraphOptimization::WallTimeS() const {
