@@ -13,7 +13,7 @@
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
-#include "frontend/evidence.h"
+#include "experiments/evidence.h"
 
 namespace catgraph {
 namespace {

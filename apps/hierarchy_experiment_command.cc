@@ -148,10 +148,10 @@ void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   std::vector<Row> rows;
   for (const std::uint64_t seed : o.seeds) {
     localization.filter.seed = seed;
-    localization.false_matches.clear();
+    localization.imposed.clear();
     const LocalizationResult without = Localize(d, words, model, localization);
     o.injection.seed = seed;
-    localization.false_matches = PlanFalseVisualMatches(d, localization.filter, o.injection);
+    localization.imposed = ImposedDecisions(PlanFalseVisualMatches(d, localization.filter, o.injection));
     const LocalizationResult with = Localize(d, words, model, localization);
     LocalizationOptions vetoed = localization;
     for (const LoopClosure& c : with.closures) {

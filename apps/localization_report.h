@@ -17,6 +17,7 @@
 #include "apps/plot/figure.h"
 #include "backend/io/dataset.h"
 #include "backend/io/output_directory.h"
+#include "experiments/false_matches.h"
 #include "frontend/localization.h"
 #include "mapping/mapper.h"
 

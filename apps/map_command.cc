@@ -42,6 +42,7 @@ namespace {
 struct MapCommandOptions {
   LocalizeCommandOptions front;  // every library option in front.pipeline
   FalseMatchOptions injection;  // its seed is the filter's
+  std::vector<FalseVisualMatch> false_matches;  // planned by RunMap from `injection`
   int feedback_reruns = kDefaultFeedbackReruns;
 };
 
@@ -115,7 +116,8 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
   const Dataset d = ReadDataset(o.front.dataset);
   const std::filesystem::path& dir = output.path();
   o.injection.seed = o.front.pipeline.front_end.filter.seed;
-  o.front.pipeline.front_end.false_matches = PlanFalseVisualMatches(d, o.front.pipeline.front_end.filter, o.injection);
+  o.false_matches = PlanFalseVisualMatches(d, o.front.pipeline.front_end.filter, o.injection);
+  o.front.pipeline.front_end.imposed = ImposedDecisions(o.false_matches);
 
   out << "[1/3] front end: CAT-Graph" << (o.front.pipeline.front_end.filter.inference.enabled ? "+" : "") << " on "
       << d.frames.size() << " frames";
@@ -233,7 +235,7 @@ void RunMap(MapCommandOptions& o, std::ostream& out) {
                                 {"feedback", {{"reruns", fed.reruns}, {"vetoed_frames", vetoed_frames}}}};
   if (o.injection.count > 0) {
     nlohmann::ordered_json matches = nlohmann::ordered_json::array();
-    for (const FalseVisualMatch& f : o.front.pipeline.front_end.false_matches) {
+    for (const FalseVisualMatch& f : o.false_matches) {
       matches.push_back({{"first_frame", f.first_frame},
                          {"last_frame", f.last_frame},
                          {"matched_first_frame", f.matched_first_frame},

@@ -12,7 +12,7 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/output_directory.h"
 
 namespace catgraph {

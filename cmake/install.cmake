@@ -9,7 +9,7 @@
 # finds every library as catgraph::NAME with its dependencies (docs/library.md).
 include(CMakePackageConfigHelpers)
 
-set(catgraph_exported graph io image_io backend frontend hierarchy mapping simulation plot)
+set(catgraph_exported graph io image_io backend frontend hierarchy mapping simulation plot experiments)
 foreach(name IN LISTS catgraph_exported)
   set_target_properties(catgraph_${name} PROPERTIES EXPORT_NAME ${name})
   list(APPEND catgraph_exported_targets catgraph_${name})
@@ -19,7 +19,7 @@ install(TARGETS ${catgraph_exported_targets} EXPORT catgraphTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(TARGETS catgraph RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-foreach(dir backend frontend hierarchy mapping simulation apps/plot)
+foreach(dir backend frontend hierarchy mapping simulation apps/plot experiments)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/catgraph/${dir}
     FILES_MATCHING PATTERN "*.h" PATTERN "scenarios" EXCLUDE)
 endforeach()

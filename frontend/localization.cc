@@ -133,6 +133,9 @@ void Validate(const LocalizationOptions& options) {
   Validate(options.filter);
   Validate(options.graph_uncertainty);
   if (options.threads < 0) throw std::invalid_argument("LocalizationOptions: threads must be >= 0");
+  if (!options.imposed.empty() && options.imposed.begin()->first < 0) {
+    throw std::invalid_argument("LocalizationOptions: imposed decisions need frames >= 0");
+  }
 }
 
 Localizer::Localizer(const ObservationModel& model, LocalizationOptions options)
@@ -178,10 +181,11 @@ void Localizer::Discard(const InferredClosure& inferred, int reference, int vali
                                           LocationError(static_cast<std::size_t>(at), inferred.location), reason});
 }
 
-FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z, const ClosureOverride& imposed) {
+FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z) {
   const PoseGraphUncertainty& uncertainty = result_.options.graph_uncertainty;
   const std::size_t k = result_.frames.size();
-  ClosureOverride decision = imposed;
+  const auto imposed = result_.options.imposed.find(static_cast<int>(k));
+  ClosureOverride decision = imposed == result_.options.imposed.end() ? ClosureOverride{} : imposed->second;
   decision.vetoed = decision.vetoed || result_.options.vetoed_frames.count(static_cast<int>(k)) > 0;
   truth_.push_back(in.truth);
   const Pose2 u = last_odometry_ ? last_odometry_->Between(in.odometry) : Pose2();
@@ -257,26 +261,9 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     throw std::invalid_argument("Localize: " + std::to_string(observations.size()) + " observations for " +
                                 std::to_string(d.frames.size()) + " frames");
   }
-  // The false matches imposed on each frame.
-  std::vector<ClosureOverride> imposed(d.frames.size());
-  for (const FalseVisualMatch& m : options.false_matches) {
-    auto frame_ok = [&](int f) { return f >= 0 && static_cast<std::size_t>(f) < d.frames.size(); };
-    if (!(frame_ok(m.first_frame) && frame_ok(m.last_frame) && frame_ok(m.matched_first_frame) &&
-          frame_ok(m.matched_last_frame) && m.first_frame < m.last_frame &&
-          m.matched_first_frame < m.first_frame && m.matched_last_frame < m.first_frame)) {
-      throw std::invalid_argument("Localize: a false visual match must map frames first < last onto older frames " +
-                                  std::string("of the dataset, not ") + std::to_string(m.first_frame) + "-" +
-                                  std::to_string(m.last_frame) + " onto " + std::to_string(m.matched_first_frame) +
-                                  "-" + std::to_string(m.matched_last_frame));
-    }
-    for (int f = m.first_frame; f <= m.last_frame; ++f) {
-      if (imposed[static_cast<std::size_t>(f)].withhold) {
-        throw std::invalid_argument("Localize: false visual matches overlap at frame " + std::to_string(f));
-      }
-      imposed[static_cast<std::size_t>(f)].withhold = true;
-    }
-    imposed[static_cast<std::size_t>(m.first_frame)].force_node = m.matched_first_frame;
-    imposed[static_cast<std::size_t>(m.last_frame)].force_node = m.matched_last_frame;
+  if (!options.imposed.empty() && static_cast<std::size_t>(options.imposed.rbegin()->first) >= d.frames.size()) {
+    throw std::invalid_argument("Localize: a decision is imposed on frame " +
+                                std::to_string(options.imposed.rbegin()->first) + ", which is not a frame of the dataset");
   }
   for (const int f : options.vetoed_frames) {
     if (f < 0 || static_cast<std::size_t>(f) >= d.frames.size()) {
@@ -297,7 +284,7 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
     in.odometry = odometry[k];
     in.traversal = d.frames[k].traversal;
     if (!truth.empty()) in.truth = truth[k];
-    localizer.AddFrame(in, observations[k], imposed[k]);
+    localizer.AddFrame(in, observations[k]);
     if (options.on_progress && (k % 50 == 0 || k + 1 == d.frames.size())) {
       options.on_progress("filter", k + 1, d.frames.size());
     }

@@ -18,7 +18,6 @@
 #include "backend/graph/pose_graph.h"
 #include "backend/io/dataset.h"
 #include "frontend/cat_graph.h"
-#include "frontend/false_matches.h"
 #include "frontend/holistic.h"
 #include "frontend/observation_model.h"
 #include "frontend/vocabulary.h"
@@ -53,7 +52,7 @@ struct LoopClosure {
   double error_m = kNoError;      // position error of the matched location
   // Inferred: the visual closure it hangs from and the one that validated it.
   std::vector<int> parents;
-  bool injected = false;          // a false visual match of LocalizationOptions::false_matches
+  bool injected = false;          // forced by LocalizationOptions::imposed (a false match)
   bool vetoed = false;            // visual, at a frame of LocalizationOptions::vetoed_frames
 };
 
@@ -101,9 +100,12 @@ void Validate(const PoseGraphUncertainty& uncertainty);
 struct LocalizationOptions {
   CatGraphOptions filter;
   PoseGraphUncertainty graph_uncertainty;
-  // Perceptual aliasing imposed on the filter (false_matches.h); empty:
-  // none. Checked against the dataset's frames.
-  std::vector<FalseVisualMatch> false_matches;
+  // Closure decisions imposed on the filter by frame number
+  // (CatGraphFilter::Commit; e.g. the false visual matches of
+  // experiments/false_matches.h); empty: none, the filter decides. Frames
+  // >= 0; a forced node must be older than the filter's exclusion windows
+  // when its frame comes.
+  std::map<int, ClosureOverride> imposed;
   // Frames whose visual closure CAT-Graph+ must not use (ClosureOverride::vetoed):
   // the frames of visual closures the back end rejected. The closures are
   // still made and reported, flagged `vetoed`.
@@ -191,8 +193,8 @@ struct FrameInput {
 // mapping::Mapper. Frame k (the k-th AddFrame) is vertex k of the pose graph.
 class Localizer {
  public:
-  // `model` must outlive the localizer. options.vetoed_frames apply by frame
-  // number; options.false_matches are Localize's and ignored here. Throws
+  // `model` must outlive the localizer. options.imposed and
+  // options.vetoed_frames apply by frame number. Throws
   // std::invalid_argument on options out of range.
   Localizer(const ObservationModel& model, LocalizationOptions options);
   Localizer(const Localizer&) = delete;
@@ -202,9 +204,9 @@ class Localizer {
   // (a visual one, then the inferences it validated) are appended to
   // result().closures, the inferences it discarded or dropped to
   // result().discarded_inferences, its vertex and edges to result().graph.
-  // `decision` overrules the filter's closure decision (Localize's false
-  // matches); the frame's veto (options.vetoed_frames) is added to it.
-  FrameLocalization AddFrame(const FrameInput& frame, const Observation& z, const ClosureOverride& decision = {});
+  // Throws std::invalid_argument when a decision imposed on the frame
+  // forces a node that is not older than the exclusion windows.
+  FrameLocalization AddFrame(const FrameInput& frame, const Observation& z);
 
   const LocalizationResult& result() const { return result_; }
   // The result so far, moved out; the localizer is then spent.

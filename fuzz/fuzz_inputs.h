@@ -21,7 +21,7 @@
 #include <string>
 #include <string_view>
 
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"

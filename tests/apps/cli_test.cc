@@ -26,7 +26,7 @@
 #include "apps/commands.h"
 #include "apps/localization_report.h"
 #include "apps/plot/figure.h"
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/closure_labels.h"
 #include "backend/io/dataset.h"
 #include "tests/test_support.h"

@@ -26,7 +26,7 @@
 
 #include "tests/catch.h"
 
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/dataset.h"
 #include "tests/test_support.h"
 

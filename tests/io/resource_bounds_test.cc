@@ -11,7 +11,7 @@
 #include "tests/catch.h"
 #include <opencv2/imgcodecs.hpp>
 
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/dataset.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"

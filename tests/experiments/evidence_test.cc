@@ -7,7 +7,7 @@
 
 #include "tests/catch.h"
 
-#include "frontend/evidence.h"
+#include "experiments/evidence.h"
 
 namespace catgraph {
 namespace {
@@ -52,7 +52,7 @@ Corridor MakeCorridor() {
   return c;
 }
 
-TEST_CASE("evidence: the true place explains a revisit, the places metres away do not", "[frontend][evidence]") {
+TEST_CASE("evidence: the true place explains a revisit, the places metres away do not", "[experiments][evidence]") {
   const Corridor c = MakeCorridor();
   const FabMapModel model = c.Model();
   const std::vector<FrameEvidence> e = MeasureEvidence(model, c.words, c.truth, {}, c.first, c.second);
@@ -83,7 +83,7 @@ TEST_CASE("evidence: the true place explains a revisit, the places metres away d
   }
 }
 
-TEST_CASE("evidence: the separation counts frames over constant + relative x self", "[frontend][evidence]") {
+TEST_CASE("evidence: the separation counts frames over constant + relative x self", "[experiments][evidence]") {
   std::vector<FrameEvidence> e(4);
   // self, true, near: offsets 10 + 0.1 self = 20, 15, 12, -
   e[0].self = 100, e[0].true_place = 30, e[0].near = 25;  // both over 20
@@ -97,7 +97,7 @@ TEST_CASE("evidence: the separation counts frames over constant + relative x sel
   CHECK(SeparationAt({}, 0.0, 0.0).frames == 0);
 }
 
-TEST_CASE("evidence: mismatched inputs and bad options are refused", "[frontend][evidence]") {
+TEST_CASE("evidence: mismatched inputs and bad options are refused", "[experiments][evidence]") {
   const Corridor c = MakeCorridor();
   const FabMapModel model = c.Model();
   std::vector<Pose2> short_truth(c.truth.begin(), c.truth.end() - 1);

@@ -1,4 +1,4 @@
-#include "frontend/evidence.h"
+#include "experiments/evidence.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 
 #include <fcntl.h>
 #include <sys/file.h>

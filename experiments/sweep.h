@@ -3,8 +3,8 @@
 // (one appended line each, synced), so an interrupted sweep loses no finished
 // run and a rerun with the same output resumes where it stopped. A sweep can
 // be cut into deterministic shards for a cluster and the shards merged.
-#ifndef CATGRAPH_APPS_SWEEP_H_
-#define CATGRAPH_APPS_SWEEP_H_
+#ifndef CATGRAPH_EXPERIMENTS_SWEEP_H_
+#define CATGRAPH_EXPERIMENTS_SWEEP_H_
 
 #include <atomic>
 #include <cstdint>
@@ -118,4 +118,4 @@ std::vector<std::filesystem::path> PlotSweep(const std::filesystem::path& csv,
 
 }  // namespace catgraph
 
-#endif  // CATGRAPH_APPS_SWEEP_H_
+#endif  // CATGRAPH_EXPERIMENTS_SWEEP_H_

@@ -13,8 +13,8 @@
 //   far       the best of the rest.
 // Map frames facing more than `max_heading_rad` away from the query are left
 // out: a forward camera sees something else there.
-#ifndef CATGRAPH_FRONTEND_EVIDENCE_H_
-#define CATGRAPH_FRONTEND_EVIDENCE_H_
+#ifndef CATGRAPH_EXPERIMENTS_EVIDENCE_H_
+#define CATGRAPH_EXPERIMENTS_EVIDENCE_H_
 
 #include <cstddef>
 #include <limits>
@@ -76,4 +76,4 @@ OffsetSeparation SeparationAt(const std::vector<FrameEvidence>& evidence, double
 
 }  // namespace catgraph
 
-#endif  // CATGRAPH_FRONTEND_EVIDENCE_H_
+#endif  // CATGRAPH_EXPERIMENTS_EVIDENCE_H_

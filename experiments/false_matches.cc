@@ -1,4 +1,4 @@
-#include "frontend/false_matches.h"
+#include "experiments/false_matches.h"
 
 #include <algorithm>
 #include <cmath>
@@ -111,6 +111,26 @@ std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& d, const Cat
   std::sort(plan.begin(), plan.end(),
             [](const FalseVisualMatch& a, const FalseVisualMatch& b) { return a.first_frame < b.first_frame; });
   return plan;
+}
+
+std::map<int, ClosureOverride> ImposedDecisions(const std::vector<FalseVisualMatch>& plan) {
+  std::map<int, ClosureOverride> imposed;
+  for (const FalseVisualMatch& m : plan) {
+    if (!(m.matched_first_frame >= 0 && m.matched_last_frame >= 0 && m.first_frame < m.last_frame &&
+          m.matched_first_frame < m.first_frame && m.matched_last_frame < m.first_frame)) {
+      throw std::invalid_argument("a false visual match must map frames first < last onto older frames, not " +
+                                  std::to_string(m.first_frame) + "-" + std::to_string(m.last_frame) + " onto " +
+                                  std::to_string(m.matched_first_frame) + "-" + std::to_string(m.matched_last_frame));
+    }
+    for (int f = m.first_frame; f <= m.last_frame; ++f) {
+      if (!imposed.try_emplace(f, ClosureOverride{.withhold = true}).second) {
+        throw std::invalid_argument("false visual matches overlap at frame " + std::to_string(f));
+      }
+    }
+    imposed[m.first_frame].force_node = m.matched_first_frame;
+    imposed[m.last_frame].force_node = m.matched_last_frame;
+  }
+  return imposed;
 }
 
 }  // namespace catgraph

@@ -2,13 +2,15 @@
 // (false by ground truth, same shape by odometry, inside the gate, apart),
 // and the filter taking a stretch for the wrong one.
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
 
 #include "tests/catch.h"
 
-#include "frontend/false_matches.h"
+#include "experiments/false_matches.h"
+#include "frontend/localization.h"
 
 namespace catgraph {
 namespace {
@@ -47,7 +49,7 @@ double PathBetween(const std::vector<TimedPose2>& poses, int a, int b) {
 }
 
 TEST_CASE("false visual matches are false, of the old stretch's shape, inside the gate and apart",
-          "[frontend][false-matches]") {
+          "[experiments][false-matches]") {
   const Dataset d = RectangleLaps();
   const CatGraphOptions filter;
   FalseMatchOptions o;
@@ -94,7 +96,7 @@ TEST_CASE("false visual matches are false, of the old stretch's shape, inside th
   CHECK(differs);
 }
 
-TEST_CASE("false visual matches need ground truth, sane options and room", "[frontend][false-matches][bad-input]") {
+TEST_CASE("false visual matches need ground truth, sane options and room", "[experiments][false-matches][bad-input]") {
   Dataset d = RectangleLaps();
   FalseMatchOptions o;
   o.count = 0;
@@ -107,6 +109,33 @@ TEST_CASE("false visual matches need ground truth, sane options and room", "[fro
   o.max_error_m = 1e9;
   d.ground_truth.clear();
   CHECK_THROWS_WITH(PlanFalseVisualMatches(d, CatGraphOptions{}, o), Catch::Contains("ground truth"));
+}
+
+TEST_CASE("a plan is imposed as forced ends and withheld closures between them, frame by frame",
+          "[experiments][false-matches]") {
+  const std::vector<FalseVisualMatch> plan = {{20, 23, 5, 8}, {30, 31, 2, 3}};
+  const std::map<int, ClosureOverride> imposed = ImposedDecisions(plan);
+  CHECK(imposed.size() == 6);
+  for (const auto& [frame, d] : imposed) {
+    CAPTURE(frame);
+    CHECK(d.withhold);
+    CHECK_FALSE(d.vetoed);
+  }
+  CHECK(imposed.at(20).force_node == 5);
+  CHECK(imposed.at(21).force_node == -1);
+  CHECK(imposed.at(22).force_node == -1);
+  CHECK(imposed.at(23).force_node == 8);
+  CHECK(imposed.at(30).force_node == 2);
+  CHECK(imposed.at(31).force_node == 3);
+  CHECK(ImposedDecisions({}).empty());
+
+  CHECK_THROWS_WITH(ImposedDecisions({{20, 23, 5, 8}, {23, 25, 1, 2}}), Catch::Contains("overlap at frame 23"));
+  CHECK_THROWS_AS(ImposedDecisions({{20, 20, 5, 8}}), std::invalid_argument);   // first < last
+  CHECK_THROWS_AS(ImposedDecisions({{20, 23, 21, 8}}), std::invalid_argument);  // onto an older frame
+  CHECK_THROWS_AS(ImposedDecisions({{20, 23, -1, 8}}), std::invalid_argument);
+  LocalizationOptions options;
+  options.imposed[-1] = {};
+  CHECK_THROWS_AS(Validate(options), std::invalid_argument);
 }
 
 }  // namespace

@@ -8,13 +8,14 @@
 // docs/mapping.md.
 //
 // The plan is made from the dataset's odometry and ground truth before the
-// filter runs (ground truth makes sure every match is false); Localize
-// applies it through CatGraphFilter::Commit (ClosureOverride).
-#ifndef CATGRAPH_FRONTEND_FALSE_MATCHES_H_
-#define CATGRAPH_FRONTEND_FALSE_MATCHES_H_
+// filter runs (ground truth makes sure every match is false), and imposed
+// on it by frame (ImposedDecisions, LocalizationOptions::imposed).
+#ifndef CATGRAPH_EXPERIMENTS_FALSE_MATCHES_H_
+#define CATGRAPH_EXPERIMENTS_FALSE_MATCHES_H_
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <vector>
 
 #include "backend/io/dataset.h"
@@ -59,6 +60,13 @@ struct FalseMatchOptions {
 std::vector<FalseVisualMatch> PlanFalseVisualMatches(const Dataset& dataset, const CatGraphOptions& filter,
                                                      const FalseMatchOptions& options);
 
+// The plan as decisions imposed on the filter by frame: at the first and
+// last frame of each stretch the old frame is forced, every frame between
+// them withholds the filter's own closure. Throws std::invalid_argument for
+// a match that does not map frames first < last onto older frames, or for
+// matches that overlap.
+std::map<int, ClosureOverride> ImposedDecisions(const std::vector<FalseVisualMatch>& plan);
+
 }  // namespace catgraph
 
-#endif  // CATGRAPH_FRONTEND_FALSE_MATCHES_H_
+#endif  // CATGRAPH_EXPERIMENTS_FALSE_MATCHES_H_

@@ -5,7 +5,7 @@
 
 #include "tests/catch.h"
 
-#include "apps/sweep.h"
+#include "experiments/sweep.h"
 #include "backend/io/file_error.h"
 #include "backend/io/graph_io.h"
 #include "simulation/manhattan_world.h"
@@ -43,7 +43,7 @@ std::map<std::string, SweepRow> RowsByKey(const std::filesystem::path& csv) {
 }
 
 TEST_CASE("the grid is the full product in a fixed order and shards partition it",
-          "[apps][sweep]") {
+          "[experiments][sweep]") {
   SweepConfig c;
   c.datasets = {{"a", "a.g2o", ""}, {"b", "b.g2o", ""}};
   const std::vector<SweepRun> grid = SweepGrid(c);
@@ -63,7 +63,7 @@ TEST_CASE("the grid is the full product in a fixed order and shards partition it
 }
 
 TEST_CASE("YAML and JSON configurations read alike, unknown keys are errors",
-          "[apps][sweep][bad-input]") {
+          "[experiments][sweep][bad-input]") {
   const auto dir = testing::TempDir("sweep_config");
   std::ofstream(dir / "c.yaml") << "output: out.csv\ndatasets:\n  - name: m\n    graph: g.g2o\n"
                                    "    truth: /abs/t.dat\nmethods: [switchable, dcs]\n"
@@ -92,7 +92,7 @@ TEST_CASE("YAML and JSON configurations read alike, unknown keys are errors",
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("a sweep writes every run once with its scores", "[apps][sweep]") {
+TEST_CASE("a sweep writes every run once with its scores", "[experiments][sweep]") {
   const auto dir = testing::TempDir("sweep_full");
   const SweepConfig c = SmallSweep(dir);
   SweepOptions options;
@@ -129,7 +129,7 @@ TEST_CASE("a sweep writes every run once with its scores", "[apps][sweep]") {
 }
 
 TEST_CASE("an interrupted sweep, rerun, loses no finished run and repeats none",
-          "[apps][sweep]") {
+          "[experiments][sweep]") {
   const auto dir = testing::TempDir("sweep_resume");
   const SweepConfig c = SmallSweep(dir);
   std::atomic<bool> stop{false};
@@ -162,7 +162,7 @@ TEST_CASE("an interrupted sweep, rerun, loses no finished run and repeats none",
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("shards run disjoint slices whose merge is the whole sweep", "[apps][sweep]") {
+TEST_CASE("shards run disjoint slices whose merge is the whole sweep", "[experiments][sweep]") {
   const auto dir = testing::TempDir("sweep_shards");
   SweepConfig c = SmallSweep(dir);
   std::vector<std::filesystem::path> parts;
