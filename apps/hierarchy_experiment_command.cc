@@ -19,55 +19,32 @@
 
 #include "apps/commands.h"
 #include "apps/localization_report.h"
-#include "mapping/map_dataset.h"
 #include "backend/io/atomic_file.h"
 #include "backend/io/dataset.h"
+#include "experiments/hierarchy_experiment.h"
 
 namespace catgraph {
-
-using mapping::HierarchyOptionsFor;
-using mapping::InjectionOutcome;
-using mapping::MapOutcome;
-using mapping::MappingResult;
-using mapping::SolveWithFeedback;
-using mapping::TruthAtFrames;
-using mapping::kDefaultFeedbackReruns;
 namespace {
 
 struct ExperimentOptions {
   LocalizeCommandOptions front;
   std::string method = "switchable";
-  std::vector<std::string> hierarchies = {"cascade", "coupled", "flat"};
-  std::vector<std::uint64_t> seeds = {1, 2, 3, 4, 5};
-  FalseMatchOptions injection{.count = 10};
-  int feedback_reruns = kDefaultFeedbackReruns;  // as catgraph map
+  HierarchyExperimentOptions experiment;  // front_end and back_end from `front`
 };
 
-struct Row {
-  std::uint64_t seed = 0;
-  std::string hierarchy;
-  InjectionOutcome injection;
-  double ate_without_m = NAN, ate_with_m = NAN;
-  // With injection, the front end re-run with the false closures vetoed from
-  // the start and solved with them held off: perfect rejection and feedback.
-  double ate_oracle_m = NAN;
-  int solves = 0;
-  int reruns = 0;  // of the front end, by feedback
-};
-
-double AteOf(const MapOutcome& m) { return m.ate_corrected ? m.ate_corrected->ate_m.rmse : NAN; }
+using Row = HierarchyExperimentRow;
 
 std::string Command(const ExperimentOptions& o) {
   std::ostringstream c;
   c << "catgraph hierarchy-experiment " << o.front.dataset << " -o " << o.front.output << " --inject-false-visual "
-    << o.injection.count << " --seeds ";
-  for (std::size_t i = 0; i < o.seeds.size(); ++i) c << (i ? "," : "") << o.seeds[i];
+    << o.experiment.injection.count << " --seeds ";
+  for (std::size_t i = 0; i < o.experiment.seeds.size(); ++i) c << (i ? "," : "") << o.experiment.seeds[i];
   c << " --hierarchies ";
-  for (std::size_t i = 0; i < o.hierarchies.size(); ++i) c << (i ? "," : "") << o.hierarchies[i];
-  c << " --method " << o.method << " --false-stretch " << o.injection.stretch_m << " --false-min-error "
-    << o.injection.min_error_m;
-  if (std::isfinite(o.injection.max_error_m)) c << " --false-max-error " << o.injection.max_error_m;
-  c << " --feedback-reruns " << o.feedback_reruns;
+  for (std::size_t i = 0; i < o.experiment.hierarchies.size(); ++i) c << (i ? "," : "") << o.experiment.hierarchies[i];
+  c << " --method " << o.method << " --false-stretch " << o.experiment.injection.stretch_m << " --false-min-error "
+    << o.experiment.injection.min_error_m;
+  if (std::isfinite(o.experiment.injection.max_error_m)) c << " --false-max-error " << o.experiment.injection.max_error_m;
+  c << " --feedback-reruns " << o.experiment.feedback_reruns;
   return c.str();
 }
 
@@ -77,7 +54,7 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
          "children_of_rejected_accepted,children_turned_off,accepted_children_error_max_m,ate_without_m,"
          "ate_with_m,ate_oracle_m,ate_ratio,solves,reruns\n";
     for (const Row& r : rows) {
-      const InjectionOutcome& i = r.injection;
+      const mapping::InjectionOutcome& i = r.injection;
       f << r.seed << ',' << r.hierarchy << ',' << i.parents << ',' << i.parents_rejected << ',' << i.children << ','
         << i.children_accepted << ',' << i.children_of_rejected << ',' << i.children_of_rejected_accepted << ','
         << i.children_turned_off << ','
@@ -89,8 +66,8 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
   WriteFileAtomically(dir / "hierarchy-experiment.md", [&](std::ostream& f) {
     f << "# False visual matches at the source: what the closure hierarchy buys\n\n"
       << "Regenerate with\n\n    " << Command(o) << "\n\n"
-      << o.injection.count << " false matches per run on `" << o.front.dataset << "`, each a pair of false visual "
-      << "closures around a " << o.injection.stretch_m << " m stretch at least " << o.injection.min_error_m
+      << o.experiment.injection.count << " false matches per run on `" << o.front.dataset << "`, each a pair of false visual "
+      << "closures around a " << o.experiment.injection.stretch_m << " m stretch at least " << o.experiment.injection.min_error_m
       << " m from the truth; CAT-Graph+ infers the closures between them (their *children*). "
       << "\"Children of rejected\" have a false parent the back end rejected; \"survive\" is how many of those "
       << "it still accepted (both from the first solve). Under cascade and coupled the back end's verdict is then "
@@ -103,7 +80,7 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
          "ATE with (m) | ratio | ATE oracle (m) |\n"
       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
-      const InjectionOutcome& i = r.injection;
+      const mapping::InjectionOutcome& i = r.injection;
       f << "| " << r.seed << " | " << r.hierarchy << " | " << i.parents_rejected << " / " << i.parents << " | "
         << i.children << " (" << i.children_accepted << ") | " << i.children_of_rejected << " | "
         << i.children_of_rejected_accepted << " | " << i.children_turned_off << " | "
@@ -113,7 +90,7 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
     }
     f << "\n| hierarchy | seeds with every child of a rejected false parent off | seeds with ATE within 10 % | "
          "children that survive a rejected parent, in all |\n|---|---|---|---|\n";
-    for (const std::string& h : o.hierarchies) {
+    for (const std::string& h : o.experiment.hierarchies) {
       int all_off = 0, within = 0, seeds = 0, survivors = 0;
       for (const Row& r : rows) {
         if (r.hierarchy != h) continue;
@@ -130,56 +107,25 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
 
 void RunExperiment(ExperimentOptions& o, std::ostream& out) {
   ValidateOptions(o.front);
-  PoseGraphOptimizerOptions optimizer = o.front.pipeline.back_end;
-  optimizer.method = *RobustMethodFromString(o.method);
-  Validate(optimizer);
-  std::vector<HierarchyOptions> policies;
-  for (const std::string& h : o.hierarchies) policies.push_back(HierarchyOptionsFor(h, optimizer));
+  o.experiment.back_end = o.front.pipeline.back_end;
+  o.experiment.back_end.method = *RobustMethodFromString(o.method);
+  Validate(o.experiment.back_end);
+  for (const std::string& h : o.experiment.hierarchies) mapping::HierarchyOptionsFor(h, o.experiment.back_end);
   OutputDirectory output = OpenOutputDirectory(o.front, "hierarchy-experiment");
   const Dataset d = ReadDataset(o.front.dataset);
-  const Trajectory2 truth = TruthAtFrames(d);
-  if (truth.empty()) throw std::invalid_argument(o.front.dataset + ": the experiment needs ground truth");
+  if (!d.HasGroundTruth()) throw std::invalid_argument(o.front.dataset + ": the experiment needs ground truth");
 
   o.front.quiet = true;  // no progress bars: dozens of filter runs
   const FrontEndInputs inputs = PrepareFrontEnd(d, o.front, out);
-  const std::vector<Observation>& words = inputs.observations;
-  const ObservationModel& model = *inputs.model;
-  LocalizationOptions localization = o.front.pipeline.front_end;
-  std::vector<Row> rows;
-  for (const std::uint64_t seed : o.seeds) {
-    localization.filter.seed = seed;
-    localization.imposed.clear();
-    const LocalizationResult without = Localize(d, words, model, localization);
-    o.injection.seed = seed;
-    localization.imposed = ImposedDecisions(PlanFalseVisualMatches(d, localization.filter, o.injection));
-    const LocalizationResult with = Localize(d, words, model, localization);
-    LocalizationOptions vetoed = localization;
-    for (const LoopClosure& c : with.closures) {
-      if (c.injected) vetoed.vetoed_frames.insert(c.frame);
-    }
-    const LocalizationResult oracle = Localize(d, words, model, vetoed);
-    for (std::size_t p = 0; p < policies.size(); ++p) {
-      Row row;
-      row.seed = seed;
-      row.hierarchy = o.hierarchies[p];
-      row.ate_without_m =
-          AteOf(SolveWithFeedback(d, words, model, without, optimizer, policies[p], truth, o.feedback_reruns).outcome);
-      const MappingResult m = SolveWithFeedback(d, words, model, with, optimizer, policies[p], truth, o.feedback_reruns);
-      row.ate_with_m = AteOf(m.outcome);
-      row.injection = m.first.injection;
-      row.solves = m.first.solved.solves;
-      row.reruns = m.reruns;
-      row.ate_oracle_m =
-          AteOf(SolveWithFeedback(d, words, model, oracle, optimizer, policies[p], truth, o.feedback_reruns).outcome);
-      const InjectionOutcome& i = row.injection;
-      out << "seed " << seed << ", " << row.hierarchy << ": " << i.parents_rejected << " of " << i.parents
-          << " false closures rejected, " << i.children_of_rejected_accepted << " of "
-          << i.children_of_rejected << " children of rejected ones survive; ATE "
-          << Number(row.ate_without_m, "%.3f") << " -> " << Number(row.ate_with_m, "%.3f") << " m (oracle "
-          << Number(row.ate_oracle_m, "%.3f") << " m)\n";
-      rows.push_back(row);
-    }
-  }
+  o.experiment.front_end = o.front.pipeline.front_end;
+  const std::vector<Row> rows =
+      RunHierarchyExperiment(d, inputs.observations, *inputs.model, o.experiment, [&out](const Row& row) {
+        const mapping::InjectionOutcome& i = row.injection;
+        out << "seed " << row.seed << ", " << row.hierarchy << ": " << i.parents_rejected << " of " << i.parents
+            << " false closures rejected, " << i.children_of_rejected_accepted << " of " << i.children_of_rejected
+            << " children of rejected ones survive; ATE " << Number(row.ate_without_m, "%.3f") << " -> "
+            << Number(row.ate_with_m, "%.3f") << " m (oracle " << Number(row.ate_oracle_m, "%.3f") << " m)\n";
+      });
   WriteTables(o, rows, output.path());
   output.Commit();
   out << "wrote " << (std::filesystem::path(o.front.output) / "hierarchy-experiment.md").string() << " and .csv\n";
@@ -195,21 +141,21 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
       "(hierarchy-experiment.md/.csv). docs/mapping.md.");
   cmd->add_option("dataset", o->front.dataset, "Dataset directory (with ground truth)")->required();
   cmd->add_option("-o,--output", o->front.output, "Output directory")->required();
-  cmd->add_option("--inject-false-visual", o->injection.count, "False matches per run")
+  cmd->add_option("--inject-false-visual", o->experiment.injection.count, "False matches per run")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--seeds", o->seeds, "Seeds (filter and injection)")->delimiter(',')->capture_default_str();
-  cmd->add_option("--hierarchies", o->hierarchies, "Policies")
+  cmd->add_option("--seeds", o->experiment.seeds, "Seeds (filter and injection)")->delimiter(',')->capture_default_str();
+  cmd->add_option("--hierarchies", o->experiment.hierarchies, "Policies")
       ->delimiter(',')
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))
       ->capture_default_str();
   cmd->add_option("--method", o->method, "Robust method for loop closures (as catgraph optimize)")
       ->check(CLI::IsMember(RobustMethodNames()))
       ->capture_default_str();
-  AddFalseMatchOptions(*cmd, o->injection);
+  AddFalseMatchOptions(*cmd, o->experiment.injection);
   AddLocalizationOptions(*cmd, o->front);
   cmd->remove_option(cmd->get_option("--seed"));  // --seeds
-  cmd->add_option("--feedback-reruns", o->feedback_reruns,
+  cmd->add_option("--feedback-reruns", o->experiment.feedback_reruns,
                   "cascade and coupled: front-end re-runs with the rejected visual closures vetoed (as catgraph map)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -78,12 +78,6 @@ nlohmann::ordered_json ObservationJson(const ObservationSummary& o) {
   return j;
 }
 
-std::size_t TotalPathDiscards(const LocalizationResult& r) {
-  return static_cast<std::size_t>(
-      std::count_if(r.discarded_inferences.begin(), r.discarded_inferences.end(),
-                    [](const DiscardedInference& x) { return x.reason == DiscardReason::kTotalPath; }));
-}
-
 plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt) {
   plot::Series walls{std::move(label), {}, {}, plot::SeriesStyle::kSegments, color, width_pt};
   for (const auto& w : d.meta.walls) {

@@ -91,10 +91,6 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
 // PrepareFrontEnd, then CAT-Graph (and CAT-Graph+) over the dataset.
 LocalizationResult RunLocalization(const Dataset& d, LocalizeCommandOptions& o, std::ostream& out);
 
-// The discarded inferences that failed total-path validation (the others
-// were dropped before a visual closure came).
-std::size_t TotalPathDiscards(const LocalizationResult& r);
-
 // The dataset's floor plan (meta.json's walls) as one segments series; no
 // points when it has none.
 plot::Series WallsSeries(const Dataset& d, std::string label, plot::Color color, double width_pt);

@@ -129,6 +129,12 @@ void Validate(const PoseGraphUncertainty& u) {
   require(IsValidSigma(u.closure_sigma), "closure_sigma");
 }
 
+std::size_t TotalPathDiscards(const LocalizationResult& r) {
+  return static_cast<std::size_t>(
+      std::count_if(r.discarded_inferences.begin(), r.discarded_inferences.end(),
+                    [](const DiscardedInference& x) { return x.reason == DiscardReason::kTotalPath; }));
+}
+
 void Validate(const LocalizationOptions& options) {
   Validate(options.filter);
   Validate(options.graph_uncertainty);

@@ -139,6 +139,10 @@ struct LocalizationResult {
   LocalizationOptions options;
 };
 
+// The discarded inferences that failed total-path validation (the others
+// were dropped before a visual closure came).
+std::size_t TotalPathDiscards(const LocalizationResult& r);
+
 // The words of every frame of the dataset, in frame order, extracted on
 // options.threads threads. Throws FileError for an image that cannot be read.
 std::vector<WordSet> ExtractWords(const Dataset& dataset, const Vocabulary& vocabulary,
