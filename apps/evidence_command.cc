@@ -55,6 +55,7 @@ void QuantileRows(const std::vector<FrameEvidence>& frames, const std::string& l
 }
 
 void RunEvidence(EvidenceCommandOptions& o, std::ostream& out) {
+  ValidateOptions(o.base);
   OutputDirectory output = OpenOutputDirectory(o.base, "evidence");
   const Dataset d = ReadDataset(o.base.dataset);
   if (!d.HasGroundTruth()) throw FileError(o.base.dataset, 0, "evidence needs ground truth (groundtruth.csv)");

@@ -24,11 +24,9 @@ namespace catgraph {
 // The default vocabulary: trained on the dataset's first traversal (the map),
 // never on the traversals that are localised against it.
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out) {
-  if (o.train_every < 0) throw std::invalid_argument("--train-every: expected >= 0");
   if (!o.vocabulary.empty()) return Vocabulary::Load(o.vocabulary);
-  VocabularyOptions options;
-  options.words = o.words;
-  MapVocabulary v = TrainMapVocabulary(d, options, o.train_every);
+  const ObservationOptions& observation = o.pipeline.observation;
+  MapVocabulary v = TrainMapVocabulary(d, observation.vocabulary, observation.train_every);
   out << "trained a " << v.vocabulary.size() << "-word SIFT vocabulary on " << v.frames << " frames of traversal "
       << v.traversal << "\n";
   return std::move(v.vocabulary);
@@ -43,8 +41,8 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
     };
   }
   FrontEndInputs in;
-  if (o.observation == ObservationKind::kHolistic) {
-    HolisticFrontEnd holistic = PrepareHolistic(d, HolisticOptions{}, o.pipeline.front_end);
+  if (o.pipeline.observation.model == ObservationKind::kHolistic) {
+    HolisticFrontEnd holistic = PrepareHolistic(d, o.pipeline.observation.holistic, o.pipeline.front_end);
     const HolisticCalibration& c = holistic.model->calibration();
     out << "holistic observation model: " << holistic.model->options().width_px << " px templates, calibrated on "
         << c.frames << " frames of the first traversal: M = " << Number(c.identical_score, "%.2f") << "\n";
@@ -54,7 +52,7 @@ FrontEndInputs PrepareFrontEnd(const Dataset& d, LocalizeCommandOptions& o, std:
   }
   const Vocabulary vocabulary = VocabularyFor(d, o, out);
   in.observations = ExtractObservations(d, &vocabulary, nullptr, o.pipeline.front_end);
-  in.model = std::make_unique<FabMapModel>(vocabulary.tree(), FabMapOptions{});
+  in.model = std::make_unique<FabMapModel>(vocabulary.tree(), o.pipeline.observation.fabmap);
   return in;
 }
 
@@ -294,21 +292,27 @@ void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o) {
 }
 
 void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o) {
+  ObservationOptions& observation = o.pipeline.observation;
   cmd.add_option_function<std::string>(
          "--observation",
-         [&o](const std::string& name) {
+         [&observation](const std::string& name) {
            const std::optional<ObservationKind> kind = ObservationKindFromString(name);
            if (!kind) throw CLI::ValidationError("--observation", "expected fabmap or holistic, not '" + name + "'");
-           o.observation = *kind;
+           observation.model = *kind;
          },
          "Observation model: holistic (whole-image templates, calibrated on the first traversal) or fabmap "
          "(bag of words on a vocabulary). docs/frontend.md \"Observation models\"")
-      ->default_str(std::string(ToString(o.observation)));
+      ->default_str(std::string(ToString(observation.model)));
   cmd.add_option("--vocabulary", o.vocabulary,
                  "Vocabulary file (catgraph vocabulary train); default: train one on the first traversal");
-  cmd.add_option("--words", o.words, "Words of the default vocabulary")->capture_default_str();
-  cmd.add_option("--train-every", o.train_every, "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
-      ->capture_default_str();
+  o.option_fields.emplace_back(
+      cmd.add_option("--words", observation.vocabulary.words, "Words of the default vocabulary")->capture_default_str(),
+      "vocabulary.words");
+  o.option_fields.emplace_back(
+      cmd.add_option("--train-every", observation.train_every,
+                     "Default vocabulary: every N-th frame of the first traversal (0: about 200 frames)")
+          ->capture_default_str(),
+      "train_every");
 }
 
 namespace {

@@ -25,8 +25,6 @@ namespace catgraph {
 
 struct LocalizeCommandOptions {
   std::string dataset, vocabulary, output;
-  ObservationKind observation = ObservationKind::kFabMap;
-  int words = 500, train_every = 0;
   // Every library option: --preset, then --options FILE, then the flags.
   // `localize` uses the front end's; `map` all of them.
   mapping::MapperOptions pipeline;
@@ -50,7 +48,8 @@ void WriteOptions(const std::filesystem::path& dir, const LocalizeCommandOptions
 // checked before any work, committed by the caller when every file is in it.
 OutputDirectory OpenOutputDirectory(const LocalizeCommandOptions& o, const std::string& command);
 
-// The vocabulary options (--vocabulary, --words, --train-every) on `cmd`.
+// The observation options (--observation, --vocabulary, --words,
+// --train-every) on `cmd`.
 void AddVocabularyOptions(CLI::App& cmd, LocalizeCommandOptions& o);
 // The group of the options a command's --help does not list (they are
 // listed in docs/cli.md); AddLocalizationOptions' formatter leaves it out.
@@ -69,9 +68,9 @@ void AddLocalizationOptions(CLI::App& cmd, LocalizeCommandOptions& o,
 // --false-min-error, --false-max-error) on `cmd`; the count is the caller's.
 void AddFalseMatchOptions(CLI::App& cmd, FalseMatchOptions& o);
 
-// `o.vocabulary` if given; otherwise one trained on about 200 frames (or
-// every `o.train_every`-th) of the dataset's first traversal, the map, never
-// on the traversals localised against it.
+// `o.vocabulary` if given; otherwise one trained as
+// `o.pipeline.observation` says on the dataset's first traversal, the map,
+// never on the traversals localised against it.
 Vocabulary VocabularyFor(const Dataset& d, const LocalizeCommandOptions& o, std::ostream& out);
 
 // What the filter reads, made once for several runs over a dataset: the
@@ -81,7 +80,7 @@ struct FrontEndInputs {
   std::unique_ptr<ObservationModel> model;
 };
 
-// The observation model `o.observation` and every frame's observation:
+// The observation model `o.pipeline.observation` and every frame's observation:
 // FAB-MAP on the vocabulary (VocabularyFor), or the holistic model
 // calibrated on the first traversal; with progress bars unless `o.quiet`
 // (which also shows the filter's progress in later runs with

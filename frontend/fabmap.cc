@@ -99,23 +99,24 @@ ChowLiuTree LearnChowLiuTree(const std::vector<WordSet>& training, int vocabular
   return tree;
 }
 
+void Validate(const FabMapOptions& o) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("FabMapOptions: " + what); };
+  if (!(o.p_observe_given_exists > 0.0 && o.p_observe_given_exists <= 1.0)) {
+    fail("p_observe_given_exists must be in (0, 1]");
+  }
+  if (!(o.p_observe_given_absent >= 0.0 && o.p_observe_given_absent < 1.0)) {
+    fail("p_observe_given_absent must be in [0, 1)");
+  }
+  if (!std::isfinite(o.new_place_log_offset)) fail("new_place_log_offset must be finite");
+}
+
 FabMapModel::FabMapModel(ChowLiuTree tree, FabMapOptions options, std::vector<WordSet> new_place_samples)
     : tree_(std::move(tree)), options_(options), samples_(std::move(new_place_samples)) {
   if (tree_.vocabulary_size() < 1) throw std::invalid_argument("FabMapModel: empty Chow-Liu tree");
   if (options_.new_place == NewPlaceModel::kSampled && samples_.empty()) {
     throw std::invalid_argument("FabMapModel: the sampled new place needs sample observations");
   }
-  if (!(options_.p_observe_given_exists > 0.0 && options_.p_observe_given_exists <= 1.0)) {
-    throw std::invalid_argument("p_observe_given_exists: expected (0, 1], found " +
-                                std::to_string(options_.p_observe_given_exists));
-  }
-  if (!(options_.p_observe_given_absent >= 0.0 && options_.p_observe_given_absent < 1.0)) {
-    throw std::invalid_argument("p_observe_given_absent: expected [0, 1), found " +
-                                std::to_string(options_.p_observe_given_absent));
-  }
-  if (!std::isfinite(options_.new_place_log_offset)) {
-    throw std::invalid_argument("new_place_log_offset: expected a finite number");
-  }
+  Validate(options_);
 }
 
 namespace {

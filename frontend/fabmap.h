@@ -80,6 +80,8 @@ struct FabMapOptions {
   // vocabularies on rendered images (docs/frontend.md); 0 is the spec.
   double new_place_log_offset = 45.0;
 };
+// Throws std::invalid_argument naming the first field out of range.
+void Validate(const FabMapOptions& options);
 
 class FrameLikelihood;
 

@@ -135,6 +135,24 @@ std::size_t TotalPathDiscards(const LocalizationResult& r) {
                     [](const DiscardedInference& x) { return x.reason == DiscardReason::kTotalPath; }));
 }
 
+void Validate(const ObservationOptions& options) {
+  // A part's own Validate, its message naming the field by its path here.
+  auto part = [](const char* name, const char* type, auto validate) {
+    try {
+      validate();
+    } catch (const std::invalid_argument& e) {
+      std::string what = e.what();
+      const std::string prefix = std::string(type) + ": ";
+      if (what.starts_with(prefix)) what = what.substr(prefix.size());
+      throw std::invalid_argument("ObservationOptions: " + std::string(name) + "." + what);
+    }
+  };
+  part("vocabulary", "VocabularyOptions", [&] { Validate(options.vocabulary); });
+  part("fabmap", "FabMapOptions", [&] { Validate(options.fabmap); });
+  part("holistic", "HolisticOptions", [&] { Validate(options.holistic); });
+  if (options.train_every < 0) throw std::invalid_argument("ObservationOptions: train_every must be >= 0");
+}
+
 void Validate(const LocalizationOptions& options) {
   Validate(options.filter);
   Validate(options.graph_uncertainty);

@@ -18,6 +18,7 @@
 #include "backend/graph/pose_graph.h"
 #include "backend/io/dataset.h"
 #include "frontend/cat_graph.h"
+#include "frontend/fabmap.h"
 #include "frontend/holistic.h"
 #include "frontend/observation_model.h"
 #include "frontend/vocabulary.h"
@@ -174,6 +175,27 @@ struct HolisticFrontEnd {
 };
 HolisticFrontEnd PrepareHolistic(const Dataset& dataset, const HolisticOptions& holistic,
                                  const LocalizationOptions& options);
+
+// How a dataset's frames are observed, for a caller that builds the model
+// from the dataset: the model, the default vocabulary (trained on the first
+// traversal when no vocabulary is given) and each model's own options
+// (docs/frontend.md "Observation models").
+struct ObservationOptions {
+  ObservationKind model = ObservationKind::kFabMap;
+  // The default vocabulary's training; 500 words, the size the front end's
+  // figures in docs/frontend.md were measured with.
+  VocabularyOptions vocabulary = [] {
+    VocabularyOptions o;
+    o.words = 500;
+    return o;
+  }();
+  int train_every = 0;  // TrainMapVocabulary's `every`; >= 0
+  FabMapOptions fabmap;
+  HolisticOptions holistic;
+};
+// Throws std::invalid_argument naming the first field out of range (its
+// path: "vocabulary.words", "fabmap.p_observe_given_exists", ...).
+void Validate(const ObservationOptions& options);
 
 // One frame as a robot delivers it: {time_s, odometry} or with the rest.
 struct FrameInput {

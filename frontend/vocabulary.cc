@@ -98,12 +98,16 @@ WordSet QuantizeDescriptors(const cv::Mat& centres, const cv::Mat& descriptors) 
   return words;
 }
 
+void Validate(const VocabularyOptions& o) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("VocabularyOptions: " + what); };
+  if (o.words < 2) fail("words must be >= 2");
+  if (o.kmeans_iterations < 1) fail("kmeans_iterations must be >= 1");
+  if (o.kmeans_attempts < 1) fail("kmeans_attempts must be >= 1");
+  if (o.max_descriptors < static_cast<std::size_t>(o.words)) fail("max_descriptors must be >= words");
+}
+
 Vocabulary TrainVocabulary(const std::vector<cv::Mat>& images, const VocabularyOptions& options) {
-  if (options.words < 2 || options.kmeans_iterations < 1 || options.kmeans_attempts < 1 ||
-      options.max_descriptors < static_cast<std::size_t>(options.words)) {
-    throw std::invalid_argument("vocabulary options: expected words >= 2, iterations and attempts "
-                                ">= 1, max_descriptors >= words");
-  }
+  Validate(options);
   std::vector<cv::Mat> per_image;
   int total = 0;
   for (const cv::Mat& image : images) {

@@ -41,6 +41,8 @@ struct VocabularyOptions {
   std::size_t max_descriptors = 200000;    // a random subset beyond this is clustered; >= words
   std::uint64_t seed = 1;
 };
+// Throws std::invalid_argument naming the first field out of range.
+void Validate(const VocabularyOptions& options);
 
 // Descriptors of an image (colour or grey; detected on grey), one CV_32F row
 // each (binary descriptors as byte values).

@@ -19,6 +19,7 @@ PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& ba
 }
 
 void Validate(const MapperOptions& options) {
+  Validate(options.observation);
   Validate(options.front_end);
   Validate(options.back_end);
   Validate(options.hierarchy);

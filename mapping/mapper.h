@@ -35,6 +35,10 @@
 namespace catgraph::mapping {
 
 struct MapperOptions {
+  // How the frames are observed, for a caller that builds the observation
+  // model from a dataset (catgraph map, localize); the Mapper itself takes
+  // the model it is given.
+  ObservationOptions observation;
   LocalizationOptions front_end;         // CAT-Graph, CAT-Graph+, the pose graph's uncertainty
   PoseGraphOptimizerOptions back_end;    // Solve(); online solves start from it (OnlineSolveOptions)
   HierarchyOptions hierarchy;

@@ -145,8 +145,41 @@ void VisitBackEnd(V& v, PoseGraphOptimizerOptions& o) {
   });
 }
 
+std::optional<FeatureType> FeatureFromName(std::string_view text) {
+  for (const FeatureType f : {FeatureType::kSift, FeatureType::kOrb, FeatureType::kAkaze, FeatureType::kKaze}) {
+    if (ToString(f) == text) return f;
+  }
+  return std::nullopt;
+}
+
+template <typename V>
+void VisitObservation(V& v, ObservationOptions& o) {
+  v.Field("model", Spelt(o.model, &catgraph::ToString, &ObservationKindFromString));
+  v.Section("vocabulary", [&] {
+    v.Field("feature", Spelt(o.vocabulary.feature, &catgraph::ToString, &FeatureFromName));
+    v.Field("words", o.vocabulary.words);
+    v.Field("kmeans_iterations", o.vocabulary.kmeans_iterations);
+    v.Field("kmeans_attempts", o.vocabulary.kmeans_attempts);
+    v.Field("max_descriptors", o.vocabulary.max_descriptors);
+    v.Field("seed", o.vocabulary.seed);
+  });
+  v.Field("train_every", o.train_every);
+  v.Section("fabmap", [&] {
+    v.Field("p_observe_given_exists", o.fabmap.p_observe_given_exists);
+    v.Field("p_observe_given_absent", o.fabmap.p_observe_given_absent);
+    v.Field("naive_bayes", o.fabmap.naive_bayes);
+    v.Field("new_place_log_offset", o.fabmap.new_place_log_offset);
+  });
+  v.Section("holistic", [&] {
+    v.Field("width_px", o.holistic.width_px);
+    v.Field("max_shift_fraction", o.holistic.max_shift_fraction);
+    v.Field("reference_places", o.holistic.reference_places);
+  });
+}
+
 template <typename V>
 void VisitMapper(V& v, MapperOptions& o) {
+  v.Section("observation", [&] { VisitObservation(v, o.observation); });
   v.Section("front_end", [&] {
     v.Section("filter", [&] { VisitFilter(v, o.front_end.filter); });
     v.Section("graph_uncertainty", [&] {

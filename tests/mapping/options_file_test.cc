@@ -31,6 +31,12 @@ MapperOptions Unusual() {
   o.hierarchy.policy = HierarchyPolicy::kFlat;
   o.online_max_iterations = 5;
   o.solve_online = false;
+  o.observation.model = ObservationKind::kHolistic;
+  o.observation.vocabulary.feature = FeatureType::kAkaze;
+  o.observation.vocabulary.words = 250;
+  o.observation.train_every = 4;
+  o.observation.fabmap.p_observe_given_absent = 0.05;
+  o.observation.holistic.width_px = 48;
   return o;
 }
 
@@ -61,6 +67,12 @@ TEST_CASE("an options file written from options reads back to the same options",
   CHECK(read.hierarchy.policy == HierarchyPolicy::kFlat);
   CHECK(read.online_max_iterations == 5);
   CHECK_FALSE(read.solve_online);
+  CHECK(read.observation.model == ObservationKind::kHolistic);
+  CHECK(read.observation.vocabulary.feature == FeatureType::kAkaze);
+  CHECK(read.observation.vocabulary.words == 250);
+  CHECK(read.observation.train_every == 4);
+  CHECK(read.observation.fabmap.p_observe_given_absent == 0.05);
+  CHECK(read.observation.holistic.width_px == 48);
 }
 
 TEST_CASE("an options file changes the fields it names and no other", "[mapping][options]") {
@@ -100,7 +112,7 @@ TEST_CASE("an options file's mistakes name the file, the line and what was expec
              Catch::StartsWith("bad.yaml:3: unknown key 'particles' in front_end.filter; expected one of:") &&
                  Catch::Contains("num_particles"));
   CHECK_THAT(error("frontend: {}\n"), Catch::StartsWith("bad.yaml:1: unknown key 'frontend'; expected one of: "
-                                                        "back_end, front_end, hierarchy, online"));
+                                                        "back_end, front_end, hierarchy, observation, online"));
   CHECK_THAT(error("front_end:\n  filter:\n    num_particles: many\n"),
              Catch::StartsWith("bad.yaml:3: 'num_particles': expected an integer"));
   CHECK_THAT(error("front_end:\n  filter:\n    motion_sigma: [0.05, 0.05]\n"),
@@ -121,6 +133,13 @@ TEST_CASE("an options file's mistakes name the file, the line and what was expec
   CHECK_THAT(error("online:\n  max_iterations: 0\n"), Catch::StartsWith("bad.yaml:2: MapperOptions: online_max_iterations"));
   CHECK_THAT(error("front_end:\n  graph_uncertainty:\n    closure_sigma: [0.1, 0, 0.1]\n"),
              Catch::StartsWith("bad.yaml:3: PoseGraphUncertainty: closure_sigma"));
+  CHECK_THAT(error("observation:\n  vocabulary:\n    words: 1\n"),
+             Catch::StartsWith("bad.yaml:3: ObservationOptions: vocabulary.words must be >= 2"));
+  CHECK_THAT(error("observation:\n  fabmap:\n    p_observe_given_exists: 0\n"),
+             Catch::StartsWith("bad.yaml:3: ObservationOptions: fabmap.p_observe_given_exists"));
+  CHECK_THAT(error("observation:\n  holistic: {width_px: 2}\n"),
+             Catch::StartsWith("bad.yaml:2: ObservationOptions: holistic.width_px"));
+  CHECK_THAT(error("observation:\n  model: surf\n"), Catch::StartsWith("bad.yaml:2: 'model': 'surf' is not one of"));
   // coupled needs switches: the hierarchy's line.
   CHECK_THAT(error("back_end:\n  method: dcs\nhierarchy:\n  policy: coupled\n"), Catch::StartsWith("bad.yaml:"));
 }
