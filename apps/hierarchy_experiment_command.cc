@@ -43,12 +43,15 @@ std::string Command(const ExperimentOptions& o) {
   for (std::size_t i = 0; i < o.experiment.hierarchies.size(); ++i) c << (i ? "," : "") << o.experiment.hierarchies[i];
   c << " --method " << o.method << " --false-stretch " << o.experiment.injection.stretch_m << " --false-min-error "
     << o.experiment.injection.min_error_m;
-  if (std::isfinite(o.experiment.injection.max_error_m)) c << " --false-max-error " << o.experiment.injection.max_error_m;
+  if (std::isfinite(o.experiment.injection.max_error_m)) {
+    c << " --false-max-error " << o.experiment.injection.max_error_m;
+  }
   c << " --feedback-reruns " << o.experiment.feedback_reruns;
   return c.str();
 }
 
 void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const std::filesystem::path& dir) {
+  const FalseMatchOptions& injection = o.experiment.injection;
   WriteFileAtomically(dir / "hierarchy-experiment.csv", [&](std::ostream& f) {
     f << "seed,hierarchy,false_closures,false_closures_rejected,children,children_accepted,children_of_rejected,"
          "children_of_rejected_accepted,children_turned_off,accepted_children_error_max_m,ate_without_m,"
@@ -66,8 +69,8 @@ void WriteTables(const ExperimentOptions& o, const std::vector<Row>& rows, const
   WriteFileAtomically(dir / "hierarchy-experiment.md", [&](std::ostream& f) {
     f << "# False visual matches at the source: what the closure hierarchy buys\n\n"
       << "Regenerate with\n\n    " << Command(o) << "\n\n"
-      << o.experiment.injection.count << " false matches per run on `" << o.front.dataset << "`, each a pair of false visual "
-      << "closures around a " << o.experiment.injection.stretch_m << " m stretch at least " << o.experiment.injection.min_error_m
+      << injection.count << " false matches per run on `" << o.front.dataset << "`, each a pair of false visual "
+      << "closures around a " << injection.stretch_m << " m stretch at least " << injection.min_error_m
       << " m from the truth; CAT-Graph+ infers the closures between them (their *children*). "
       << "\"Children of rejected\" have a false parent the back end rejected; \"survive\" is how many of those "
       << "it still accepted (both from the first solve). Under cascade and coupled the back end's verdict is then "
@@ -144,7 +147,9 @@ void AddHierarchyExperimentCommand(CLI::App& app, std::ostream& out) {
   cmd->add_option("--inject-false-visual", o->experiment.injection.count, "False matches per run")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--seeds", o->experiment.seeds, "Seeds (filter and injection)")->delimiter(',')->capture_default_str();
+  cmd->add_option("--seeds", o->experiment.seeds, "Seeds (filter and injection)")
+      ->delimiter(',')
+      ->capture_default_str();
   cmd->add_option("--hierarchies", o->experiment.hierarchies, "Policies")
       ->delimiter(',')
       ->check(CLI::IsMember({"cascade", "coupled", "flat"}))

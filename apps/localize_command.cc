@@ -119,7 +119,8 @@ void AddInferenceSweepCommand(CLI::App& app, std::ostream& out) {
   }
   cmd->add_option("--d-tot", o->sweep.d_tot_m, "d_tot values (m)")->delimiter(',')->capture_default_str();
   cmd->add_option("--d-loc", o->sweep.d_loc_m, "d_loc values (m)")->delimiter(',')->capture_default_str();
-  cmd->add_option("--false-threshold", o->sweep.false_threshold_m, "An inference farther than this from the truth is false (m)")
+  cmd->add_option("--false-threshold", o->sweep.false_threshold_m,
+                  "An inference farther than this from the truth is false (m)")
       ->capture_default_str();
   cmd->add_flag("--back-end", o->back_end,
                 "Map each cell as catgraph map does (the back end and hierarchy of the options, the rejected "

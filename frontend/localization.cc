@@ -195,7 +195,8 @@ void Localizer::AddClosure(const LoopClosure& c, double information_scale) {
 
 // The id of the visual closure a step's inferences hung from (-1: none).
 int Localizer::ReferenceClosure(const CatGraphStep& step) const {
-  const auto found = visual_closure_of_frame_.find(step.inference.reference_node >= 0 ? FrameOf(step.inference.reference_node) : -1);
+  const int reference = step.inference.reference_node;
+  const auto found = visual_closure_of_frame_.find(reference >= 0 ? FrameOf(reference) : -1);
   return found == visual_closure_of_frame_.end() ? -1 : found->second;
 }
 
@@ -266,9 +267,12 @@ FrameLocalization Localizer::AddFrame(const FrameInput& in, const Observation& z
       i.hypothesis = inferred.location.value;
       i.error_m = LocationError(static_cast<std::size_t>(i.frame), inferred.location);
       i.parents = {reference, c.id};
-      AddClosure(i, uncertainty.share_inferred_information ? 1.0 / static_cast<double>(step.inference.inferred.size()) : 1.0);
+      const auto siblings = static_cast<double>(step.inference.inferred.size());
+      AddClosure(i, uncertainty.share_inferred_information ? 1.0 / siblings : 1.0);
     }
-    for (const InferredClosure& inferred : step.inference.discarded) Discard(inferred, reference, c.id, DiscardReason::kTotalPath);
+    for (const InferredClosure& inferred : step.inference.discarded) {
+      Discard(inferred, reference, c.id, DiscardReason::kTotalPath);
+    }
     visual_closure_of_frame_[f.frame] = c.id;
   }
   for (const InferredClosure& inferred : step.inference.lost) {
@@ -287,7 +291,8 @@ LocalizationResult Localize(const Dataset& d, const std::vector<Observation>& ob
   }
   if (!options.imposed.empty() && static_cast<std::size_t>(options.imposed.rbegin()->first) >= d.frames.size()) {
     throw std::invalid_argument("Localize: a decision is imposed on frame " +
-                                std::to_string(options.imposed.rbegin()->first) + ", which is not a frame of the dataset");
+                                std::to_string(options.imposed.rbegin()->first) +
+                                ", which is not a frame of the dataset");
   }
   for (const int f : options.vetoed_frames) {
     if (f < 0 || static_cast<std::size_t>(f) >= d.frames.size()) {

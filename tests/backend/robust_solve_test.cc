@@ -102,8 +102,9 @@ TEST_CASE("stage by stage: the gate widens, switches are added, the robust solve
   solve.Readmit();
   CHECK(FalseAccepted(solve.result().closures, world.injected) == 0);
   const PoseGraphOptimization staged = solve.Finish();
-  CHECK(StageNames(staged) ==
-        std::vector<std::string>{"noise_scale", "initial_guess", "robust_solve", "narrow", "refine", "readmit", "costs"});
+  const std::vector<std::string> stages = {"noise_scale", "initial_guess", "robust_solve", "narrow",
+                                           "refine",      "readmit",       "costs"};
+  CHECK(StageNames(staged) == stages);
 
   // By hand as OptimizePoseGraph runs them: the same decisions and poses.
   const PoseGraphOptimization whole = OptimizePoseGraph(world.graph);
