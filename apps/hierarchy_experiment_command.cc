@@ -11,7 +11,6 @@
 // The features are extracted once. docs/mapping.md.
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
