@@ -50,6 +50,74 @@ ChordalWeights ChordalWeightsOf(const Eigen::Matrix<double, N, N>& information) 
 template ChordalWeights ChordalWeightsOf<3>(const Eigen::Matrix<double, 3, 3>&);
 template ChordalWeights ChordalWeightsOf<6>(const Eigen::Matrix<double, 6, 6>&);
 
+RelativePose2Cost::RelativePose2Cost(const Pose2& measurement, const Eigen::Matrix3d& sqrt_information)
+    : measurement_(measurement),
+      cos_z_(std::cos(measurement.theta())),
+      sin_z_(std::sin(measurement.theta())),
+      sqrt_information_(sqrt_information) {
+  set_num_residuals(3);
+  mutable_parameter_block_sizes()->assign({3, 3});
+}
+
+RelativePose2Cost::RelativePose2Cost(const Pose2& measurement, const Eigen::Matrix3d& sqrt_information,
+                                     SwitchFunction function)
+    : RelativePose2Cost(measurement, sqrt_information) {
+  switch_function_ = function;
+  mutable_parameter_block_sizes()->push_back(1);
+}
+
+bool RelativePose2Cost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const double* pose_i = parameters[0];
+  const double* pose_j = parameters[1];
+  // The error as RelativePose2Error forms it, operation for operation.
+  const double c = std::cos(pose_i[2]), s = std::sin(pose_i[2]);
+  const double dx = pose_j[0] - pose_i[0], dy = pose_j[1] - pose_i[1];
+  const double lx0 = c * dx + s * dy, ly0 = -s * dx + c * dy;
+  const double lx = lx0 - measurement_.x(), ly = ly0 - measurement_.y();
+  const Eigen::Vector3d e(cos_z_ * lx + sin_z_ * ly, -sin_z_ * lx + cos_z_ * ly,
+                    WrapAngleAutoDiff(pose_j[2] - pose_i[2] - measurement_.theta()));
+  double psi = 1.0, dpsi = 0.0;
+  if (switch_function_) {
+    const double sw = parameters[2][0];
+    psi = Psi(sw, *switch_function_);
+    dpsi = *switch_function_ == SwitchFunction::kLinear ? 1.0 : psi * (1.0 - psi);
+  }
+  // U e summed as Eigen sums the automatic differentiation's product, so
+  // that both give the same residual to the last bit.
+  const Eigen::Matrix3d& u = sqrt_information_;
+  Eigen::Vector3d r;
+  for (int k = 0; k < 3; ++k) r(k) = u(k, 0) * e(0) + (u(k, 1) * e(1) + u(k, 2) * e(2));
+  Eigen::Map<Eigen::Vector3d> residual(residuals);
+  residual = psi * r;
+  if (jacobians == nullptr) return true;
+  using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+  if (jacobians[0] != nullptr || jacobians[1] != nullptr) {
+    // de/dt_j: R_z^T R_i^T; its negative and de/dtheta_i for pose i.
+    Eigen::Matrix2d rzt_rit;
+    rzt_rit << cos_z_ * c - sin_z_ * s, cos_z_ * s + sin_z_ * c,  //
+        -sin_z_ * c - cos_z_ * s, -sin_z_ * s + cos_z_ * c;
+    Eigen::Matrix3d de_dj = Eigen::Matrix3d::Zero();
+    de_dj.topLeftCorner<2, 2>() = rzt_rit;
+    de_dj(2, 2) = 1.0;
+    if (jacobians[0] != nullptr) {
+      Eigen::Matrix3d de_di = -de_dj;
+      de_di(0, 2) = cos_z_ * ly0 - sin_z_ * lx0;
+      de_di(1, 2) = -sin_z_ * ly0 - cos_z_ * lx0;
+      Eigen::Map<RowMajor3> jacobian(jacobians[0]);
+      jacobian = psi * (sqrt_information_ * de_di);
+    }
+    if (jacobians[1] != nullptr) {
+      Eigen::Map<RowMajor3> jacobian(jacobians[1]);
+      jacobian = psi * (sqrt_information_ * de_dj);
+    }
+  }
+  if (switch_function_ && jacobians[2] != nullptr) {
+    Eigen::Map<Eigen::Vector3d> jacobian(jacobians[2]);
+    jacobian = dpsi * r;
+  }
+  return true;
+}
+
 namespace {
 
 // make(residual) with the residual of `cost`: g2o's error scaled by U, or the
@@ -86,6 +154,9 @@ BetweenFactor<PoseT>::BetweenFactor(PoseId from, PoseId to,
 
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> BetweenFactor<PoseT>::NewCostFunction() const {
+  if constexpr (std::is_same_v<PoseT, Pose2>) {
+    if (cost_ == RelativePoseCostType::kG2o) return std::make_unique<RelativePose2Cost>(mean_, sqrt_information_);
+  }
   return NewRelativePoseCost(cost_, mean_, sqrt_information_, chordal_weights_, [](const auto& residual) {
     return RelativePoseCost<std::decay_t<decltype(residual)>>::Create(residual);
   });
@@ -140,6 +211,11 @@ std::vector<Key> SwitchableBetweenFactor<PoseT>::keys() const {
 template <typename PoseT>
 std::unique_ptr<ceres::CostFunction> SwitchableBetweenFactor<PoseT>::NewCostFunction() const {
   const int num_switches = static_cast<int>(coupled_.size()) + 1;
+  if constexpr (std::is_same_v<PoseT, Pose2>) {
+    if (cost_ == RelativePoseCostType::kG2o && num_switches == 1) {
+      return std::make_unique<RelativePose2Cost>(mean_, sqrt_information_, function_);
+    }
+  }
   return NewRelativePoseCost(cost_, mean_, sqrt_information_, chordal_weights_, [&](const auto& residual) {
     using Residual = std::decay_t<decltype(residual)>;
     if (num_switches > 1) {

@@ -142,6 +142,67 @@ TEST_CASE("switchable functors: Jacobians including d/ds match, linear and sigmo
   }
 }
 
+// The closed-form 2D cost against the automatic differentiation it replaces:
+// the same residuals bit for bit (the same operations), Jacobians to
+// rounding; any poses (the heading error across the +-pi cut included),
+// without a switch and with each switch function, the switch at its bounds.
+TEST_CASE("closed-form 2D cost: residuals and Jacobians equal the autodiff functors'", "[backend][functor]") {
+  std::mt19937_64 rng(24);
+  const auto same = [](const ceres::CostFunction& closed, const ceres::CostFunction& autodiff,
+                       std::vector<double*> parameters) {
+    const std::size_t blocks = parameters.size();
+    REQUIRE(closed.parameter_block_sizes() == autodiff.parameter_block_sizes());
+    REQUIRE(closed.num_residuals() == 3);
+    double r_closed[3], r_autodiff[3], r_only[3];
+    std::vector<std::vector<double>> j_closed(blocks), j_autodiff(blocks);
+    std::vector<double*> jc, ja;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      j_closed[b].assign(3 * closed.parameter_block_sizes()[b], 0.0);
+      j_autodiff[b].assign(3 * closed.parameter_block_sizes()[b], 0.0);
+      jc.push_back(j_closed[b].data());
+      ja.push_back(j_autodiff[b].data());
+    }
+    REQUIRE(closed.Evaluate(parameters.data(), r_closed, jc.data()));
+    REQUIRE(autodiff.Evaluate(parameters.data(), r_autodiff, ja.data()));
+    REQUIRE(closed.Evaluate(parameters.data(), r_only, nullptr));
+    for (int k = 0; k < 3; ++k) {
+      CHECK(r_closed[k] == r_autodiff[k]);
+      CHECK(r_only[k] == r_closed[k]);
+    }
+    for (std::size_t b = 0; b < blocks; ++b) {
+      for (std::size_t k = 0; k < j_closed[b].size(); ++k) {
+        CAPTURE(b, k);
+        CHECK(std::abs(j_closed[b][k] - j_autodiff[b][k]) <= 1e-12 * (1.0 + std::abs(j_autodiff[b][k])));
+      }
+    }
+    // A block Ceres holds constant gets no Jacobian.
+    jc[0] = nullptr;
+    REQUIRE(closed.Evaluate(parameters.data(), r_closed, jc.data()));
+  };
+  for (int trial = 0; trial < 50; ++trial) {
+    CAPTURE(trial);
+    const Pose2 xi = RandomPose2(rng), z = RandomPose2(rng);
+    const Pose2 xj = trial % 2 == 0 ? RandomPose2(rng) : xi * z * Pose2(0.3, -0.2, 0.4);
+    const Eigen::Matrix3d u = SqrtInformation<3>(RandomInformation<3>(rng));
+    auto bi = Block(xi), bj = Block(xj);
+    {
+      const RelativePose2Cost closed(z, u);
+      std::unique_ptr<ceres::CostFunction> autodiff(RelativePoseCost<G2oResidual<Pose2>>::Create({z, u}));
+      same(closed, *autodiff, {bi.data(), bj.data()});
+    }
+    for (SwitchFunction f : {SwitchFunction::kLinear, SwitchFunction::kSigmoid}) {
+      const double from_range = std::uniform_real_distribution<double>(-3.0, 3.0)(rng);
+      for (double s : {0.0, 1.0, f == SwitchFunction::kLinear ? std::abs(from_range) / 3.0 : from_range}) {
+        CAPTURE(static_cast<int>(f), s);
+        const RelativePose2Cost closed(z, u, f);
+        std::unique_ptr<ceres::CostFunction> autodiff(
+            SwitchableRelativePoseCost<G2oResidual<Pose2>>::Create({z, u}, f));
+        same(closed, *autodiff, {bi.data(), bj.data(), &s});
+      }
+    }
+  }
+}
+
 TEST_CASE("coupled switchable functor: Jacobians match, residual is the product of the switches times the plain one",
           "[backend][functor]") {
   std::mt19937_64 rng(26);
