@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <map>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include <cholmod.h>
@@ -43,26 +43,41 @@ struct Structure {
   std::vector<Key> keys;
   std::vector<int> offsets;  // keys.size() + 1 entries
   std::vector<std::vector<int>> factors;
-  std::map<Key, int> index;
+  // Every key the factors read: its variable's number, or kConstant.
+  static constexpr int kConstant = -1;
+  struct KeyHash {
+    std::size_t operator()(const Key& key) const {
+      return std::hash<std::int64_t>()(key.id) * 2 + static_cast<std::size_t>(key.type);
+    }
+  };
+  std::unordered_map<Key, int, KeyHash> index;
 };
 
 Structure StructureOf(const FactorGraph& graph, const Values& values) {
   Structure s;
   s.offsets.push_back(0);
+  s.factors.reserve(graph.size());
+  s.index.reserve(values.size());
+  // Each key's value, kind and constancy are looked up once, when a factor
+  // first reads it.
   for (const auto& factor : graph.factors()) {
     std::vector<int> variables;
     for (const Key key : factor->keys()) {
-      if (!values.Contains(key)) {
-        throw std::invalid_argument("FillReducingOrder: a factor uses " + ToString(key) +
-                                    ", which has no value");
+      auto it = s.index.find(key);
+      if (it == s.index.end()) {
+        if (!values.Contains(key)) {
+          throw std::invalid_argument("FillReducingOrder: a factor uses " + ToString(key) +
+                                      ", which has no value");
+        }
+        int number = Structure::kConstant;
+        if (!graph.constant_keys().contains(key)) {
+          number = static_cast<int>(s.keys.size());
+          s.keys.push_back(key);
+          s.offsets.push_back(s.offsets.back() + Values::TangentSize(values.KindOf(key)));
+        }
+        it = s.index.emplace(key, number).first;
       }
-      if (graph.constant_keys().contains(key)) continue;
-      const auto [it, added] = s.index.emplace(key, static_cast<int>(s.keys.size()));
-      if (added) {
-        s.keys.push_back(key);
-        s.offsets.push_back(s.offsets.back() + Values::TangentSize(values.KindOf(key)));
-      }
-      variables.push_back(it->second);
+      if (it->second != Structure::kConstant) variables.push_back(it->second);
     }
     s.factors.push_back(std::move(variables));
   }
@@ -229,7 +244,7 @@ FactorFill FillOf(const FactorGraph& graph, const Values& values, const std::vec
   std::vector<char> seen(s.keys.size(), 0);
   for (const Key key : order) {
     const auto it = s.index.find(key);
-    if (it == s.index.end() || seen[it->second]) return {};
+    if (it == s.index.end() || it->second == Structure::kConstant || seen[it->second]) return {};
     seen[it->second] = 1;
     for (int i = s.offsets[it->second]; i < s.offsets[it->second + 1]; ++i) scalars.push_back(i);
   }

@@ -7,6 +7,7 @@
 //   build/bench/catgraph_bench_optimize --benchmark_filter=3D
 //   build/bench/catgraph_bench_optimize --benchmark_filter=JointMarginals
 //   build/bench/catgraph_bench_optimize --benchmark_filter=CityShaped
+//   build/bench/catgraph_bench_optimize --benchmark_filter=FillReducingOrder
 #include <filesystem>
 #include <optional>
 #include <random>
@@ -15,6 +16,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "backend/elimination_ordering.h"
+#include "backend/factors.h"
 #include "backend/io/graph_io.h"
 #include "backend/optimizer.h"
 #include "backend/pose_graph_optimizer.h"
@@ -124,6 +127,37 @@ void BM_JointMarginals(benchmark::State& state) {
   state.counters["edges"] = static_cast<double>(truth.constraints.size());
 }
 BENCHMARK(BM_JointMarginals)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// FillReducingOrder on a generated world of state.range(0) poses (a 50-step
+// square) whose closures are all switchable, as every robust solve asks for
+// it: on graphs this thin it keeps Ceres' own order, so its time is pure
+// overhead of each solve.
+void BM_FillReducingOrder(benchmark::State& state) {
+  ManhattanWorldOptions world;
+  world.num_poses = static_cast<int>(state.range(0));
+  world.grid_cells = 50;
+  const PoseGraph2 truth = SimulateManhattanWorld(world).truth;
+  Values values;
+  FactorGraph graph;
+  for (const auto& [id, vertex] : truth.vertices) values.Insert(id, *vertex.pose);
+  int switches = 0;
+  for (const auto& c : truth.constraints) {
+    if (c.to.value() == c.from.value() + 1) {
+      graph.Emplace<BetweenFactor<Pose2>>(c.from, c.to, c.measurement);
+      continue;
+    }
+    const SwitchId s(switches++);
+    values.Insert(s, 1.0);
+    graph.Emplace<SwitchableBetweenFactor<Pose2>>(c.from, c.to, s, c.measurement);
+    graph.Emplace<SwitchPriorFactor>(s, SwitchPrior{1.0, 1.0});
+  }
+  graph.SetConstant(PoseKey(truth.vertices.begin()->first));
+  std::size_t ordered = 0;
+  for (auto _ : state) ordered = FillReducingOrder(graph, values).size();
+  state.counters["ordered"] = static_cast<double>(ordered);
+  state.counters["factors"] = static_cast<double>(graph.size());
+}
+BENCHMARK(BM_FillReducingOrder)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
 // A generated world of City10000's shape (10,000 poses on a 50-step square:
 // 21,603 edges, City10000 has 20,687) with state.range(0) random false
