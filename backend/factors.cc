@@ -75,7 +75,7 @@ bool RelativePose2Cost::Evaluate(double const* const* parameters, double* residu
   const double lx0 = c * dx + s * dy, ly0 = -s * dx + c * dy;
   const double lx = lx0 - measurement_.x(), ly = ly0 - measurement_.y();
   const Eigen::Vector3d e(cos_z_ * lx + sin_z_ * ly, -sin_z_ * lx + cos_z_ * ly,
-                    WrapAngleAutoDiff(pose_j[2] - pose_i[2] - measurement_.theta()));
+                          WrapAngleAutoDiff(pose_j[2] - pose_i[2] - measurement_.theta()));
   double psi = 1.0, dpsi = 0.0;
   if (switch_function_) {
     const double sw = parameters[2][0];
