@@ -142,7 +142,7 @@ void BM_FillReducingOrder(benchmark::State& state) {
   for (const auto& [id, vertex] : truth.vertices) values.Insert(id, *vertex.pose);
   int switches = 0;
   for (const auto& c : truth.constraints) {
-    if (c.to.value() == c.from.value() + 1) {
+    if (c.IsBetweenConsecutivePoses()) {
       graph.Emplace<BetweenFactor<Pose2>>(c.from, c.to, c.measurement);
       continue;
     }
