@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
     const std::vector<Pose2> odometry = PosesAtFrames(d, d.odometry), truth = PosesAtFrames(d, d.ground_truth);
     std::vector<double> features_ms, filter_ms, solve_ms, frame_ms;
     std::size_t closures = 0;
+    std::map<int, int> iterations;  // online solves by their iterations
     for (std::size_t k = 0; k < d.frames.size(); ++k) {
       const auto start = Clock::now();
       Observation z;
@@ -78,7 +80,10 @@ int main(int argc, char** argv) {
       const double solve = r.solve ? 1e3 * r.solve->time_s : 0.0;
       features_ms.push_back(features);
       filter_ms.push_back(total - features - solve);
-      if (r.solve) solve_ms.push_back(solve);
+      if (r.solve) {
+        solve_ms.push_back(solve);
+        ++iterations[r.solve->iterations];
+      }
       frame_ms.push_back(total);
       closures += r.closures.size();
     }
@@ -91,6 +96,9 @@ int main(int argc, char** argv) {
     PrintLatency("filters", filter_ms);
     PrintLatency("online solve (closures)", solve_ms);
     PrintLatency("frame, all stages", frame_ms);
+    std::printf("online solves by iterations:");
+    for (const auto& [n, count] : iterations) std::printf("  %d: %d", n, count);
+    std::printf("\n");
     const Trajectory2 truth_at_frames = mapping::TruthAtFrames(d);
     const auto final_start = Clock::now();
     const mapping::MapOutcome final_solve = mapper.Solve(truth_at_frames);

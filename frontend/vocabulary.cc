@@ -1,8 +1,10 @@
 #include "frontend/vocabulary.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <utility>
@@ -11,6 +13,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Core>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -86,13 +90,57 @@ cv::Mat ComputeDescriptors(FeatureType feature, const cv::Mat& image) {
 WordSet QuantizeDescriptors(const cv::Mat& centres, const cv::Mat& descriptors) {
   WordSet words;
   if (descriptors.empty()) return words;
-  if (descriptors.cols != centres.cols || descriptors.type() != CV_32F) {
+  if (descriptors.type() != CV_32F || centres.type() != CV_32F) {
+    throw std::invalid_argument("descriptors and word centres: expected CV_32F rows");
+  }
+  if (descriptors.cols != centres.cols) {
     throw std::invalid_argument("descriptors of " + std::to_string(descriptors.cols) +
                                 " values; the vocabulary's words have " + std::to_string(centres.cols));
   }
-  std::vector<cv::DMatch> matches;
-  cv::BFMatcher(cv::NORM_L2).match(descriptors, centres, matches);
-  for (const auto& m : matches) words.push_back(m.trainIdx);
+  // ||x - c||^2 = ||x||^2 + ||c||^2 - 2 x.c ranks the centres for every
+  // descriptor at once through one matrix product, several times faster
+  // than a distance per pair (BFMatcher). Its rounding could swap two
+  // centres whose distances nearly tie, so every centre within the
+  // product's error bound of the best is measured again as BFMatcher
+  // measures it (cv::hal::normL2Sqr_, the lowest index on a tie): the words
+  // are exactly BFMatcher's.
+  using RowMajor = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const cv::Mat c = centres.isContinuous() ? centres : centres.clone();
+  const cv::Mat d = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  const Eigen::Map<const RowMajor> cm(c.ptr<float>(), c.rows, c.cols);
+  const Eigen::Map<const RowMajor> dm(d.ptr<float>(), d.rows, d.cols);
+  const Eigen::VectorXf centre_norms = cm.rowwise().squaredNorm();
+  const float max_centre_norm = std::sqrt(centre_norms.maxCoeff());
+  const RowMajor products = dm * cm.transpose();
+  // A float dot product of n terms is off by at most n u ||x|| ||c|| (u the
+  // unit round-off; Cauchy-Schwarz on the sum of |x_k c_k|), a squared norm
+  // by n u ||c||^2, and BFMatcher's own distance by n u ||x - c||^2: the
+  // window 8 n u (||x|| + max ||c||)^2 holds twice all of them together.
+  const float unit = std::numeric_limits<float>::epsilon() / 2.0f;
+  std::vector<int> candidates;
+  Eigen::VectorXf rank(c.rows);
+  for (int i = 0; i < d.rows; ++i) {
+    rank.noalias() = centre_norms - 2.0f * products.row(i).transpose();
+    const float least = rank.minCoeff();
+    const float reach = dm.row(i).norm() + max_centre_norm;
+    const float tolerance = 8.0f * static_cast<float>(d.cols) * unit * reach * reach;
+    candidates.clear();
+    for (Eigen::Index j = 0; j < rank.size(); ++j) {
+      if (rank(j) <= least + tolerance) candidates.push_back(static_cast<int>(j));
+    }
+    int word = candidates.front();
+    if (candidates.size() > 1) {
+      float nearest = std::numeric_limits<float>::infinity();
+      for (const int j : candidates) {
+        const float distance = std::sqrt(cv::hal::normL2Sqr_(d.ptr<float>(i), c.ptr<float>(j), d.cols));
+        if (distance < nearest) {
+          nearest = distance;
+          word = j;
+        }
+      }
+    }
+    words.push_back(word);
+  }
   std::sort(words.begin(), words.end());
   words.erase(std::unique(words.begin(), words.end()), words.end());
   return words;

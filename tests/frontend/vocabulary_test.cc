@@ -6,6 +6,8 @@
 #include <map>
 #include <vector>
 
+#include <opencv2/features2d.hpp>
+
 #include "tests/catch.h"
 
 #include "backend/io/file_error.h"
@@ -55,6 +57,54 @@ TEST_CASE("a descriptor equal to a word centre quantises to that word", "[fronte
   near.push_back(cv::Mat(centres.row(1) - 0.2f));
   CHECK(QuantizeDescriptors(centres, near) == WordSet{1});
   CHECK_THROWS_AS(QuantizeDescriptors(centres, cv::Mat::zeros(1, 4, CV_32F)), std::invalid_argument);
+}
+
+// The words BFMatcher gives: each descriptor's nearest centre, the lowest
+// index on a tie.
+WordSet BruteForceWords(const cv::Mat& centres, const cv::Mat& descriptors) {
+  std::vector<cv::DMatch> matches;
+  cv::BFMatcher(cv::NORM_L2).match(descriptors, centres, matches);
+  WordSet words;
+  for (const cv::DMatch& m : matches) words.push_back(m.trainIdx);
+  std::sort(words.begin(), words.end());
+  words.erase(std::unique(words.begin(), words.end()), words.end());
+  return words;
+}
+
+TEST_CASE("quantisation gives BFMatcher's words, near ties included", "[frontend][vocabulary]") {
+  // SIFT descriptors of office frames against centres that are descriptors
+  // of other frames: distances of real magnitude, many near ties.
+  const auto& office = Office(40);
+  cv::Mat pool;
+  for (const cv::Mat& image : office.images) pool.push_back(ComputeDescriptors(FeatureType::kSift, image));
+  REQUIRE(pool.rows > 600);
+  const cv::Mat centres = pool.rowRange(0, 300).clone();
+  int frames = 0;
+  for (int start = 300; start + 40 <= pool.rows; start += 40, ++frames) {
+    const cv::Mat descriptors = pool.rowRange(start, start + 40);
+    CHECK(QuantizeDescriptors(centres, descriptors) == BruteForceWords(centres, descriptors));
+  }
+  CHECK(frames > 5);
+
+  // Exact ties (a centre listed twice) go to the lower index, as BFMatcher's.
+  cv::Mat doubled = centres.rowRange(0, 10).clone();
+  doubled.push_back(centres.row(3));
+  CHECK(QuantizeDescriptors(doubled, centres.row(3)) == WordSet{3});
+  CHECK(BruteForceWords(doubled, centres.row(3)) == WordSet{3});
+  // Two centres a rounding apart, in the order that makes the product's
+  // ranking and the exact distance disagree for some descriptors.
+  cv::Mat close = centres.rowRange(0, 2).clone();
+  close.row(1) = close.row(0) + 1e-3f;
+  cv::Mat between = 0.5 * (close.row(0) + close.row(1));
+  for (int k = 0; k < 20; ++k) {
+    between.at<float>(0, k) += (k % 2 ? 1e-4f : -1e-4f);
+    CHECK(QuantizeDescriptors(close, between) == BruteForceWords(close, between));
+  }
+
+  cv::Mat strided = cv::Mat::zeros(3, 2 * centres.cols, CV_32F);
+  centres.rowRange(0, 3).copyTo(strided.colRange(0, centres.cols));
+  CHECK(QuantizeDescriptors(centres, strided.colRange(0, centres.cols)) == WordSet{0, 1, 2});
+  CHECK_THROWS_AS(QuantizeDescriptors(centres, cv::Mat::zeros(1, centres.cols, CV_64F)), std::invalid_argument);
 }
 
 TEST_CASE("a vocabulary trains deterministically and survives its file", "[frontend][vocabulary]") {
