@@ -70,34 +70,43 @@ namespace {
 
 using Pose3Manifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
 
+// `key`'s block of `values` as a parameter block of `problem`.
+void AddVariable(Values& values, Key key, ceres::Problem& problem) {
+  const VariableKind kind = values.KindOf(key);
+  double* block = values.MutableBlock(key);
+  if (kind == VariableKind::kPose3) {
+    problem.AddParameterBlock(block, 7, new Pose3Manifold());
+  } else {
+    problem.AddParameterBlock(block, Values::BlockSize(kind));
+  }
+}
+
+// `factor` over `values`' blocks as a residual block of `problem`, with its
+// robust loss and bounds; `who` names the caller in the error for a key
+// without a value.
+ceres::ResidualBlockId AddFactor(const Factor& factor, Values& values, ceres::Problem& problem, const char* who) {
+  std::vector<double*> blocks;
+  for (const Key key : factor.keys()) {
+    if (!values.Contains(key)) {
+      throw std::invalid_argument(std::string(who) + ": a factor uses " + ToString(key) + ", which has no initial value");
+    }
+    blocks.push_back(values.MutableBlock(key));
+  }
+  const ceres::ResidualBlockId id =
+      problem.AddResidualBlock(factor.NewCostFunction().release(), factor.NewLossFunction().release(), blocks);
+  for (const ParameterBound& b : factor.bounds()) {
+    double* block = values.MutableBlock(b.key);
+    problem.SetParameterLowerBound(block, b.index, b.lower);
+    problem.SetParameterUpperBound(block, b.index, b.upper);
+  }
+  return id;
+}
+
 // The factors over `values`' blocks as a ceres::Problem (which keeps
 // pointers into `values`), with their robust losses and bounds.
 void BuildProblem(const FactorGraph& graph, Values& values, ceres::Problem& problem) {
-  for (const Key key : values.keys()) {
-    const VariableKind kind = values.KindOf(key);
-    double* block = values.MutableBlock(key);
-    if (kind == VariableKind::kPose3) {
-      problem.AddParameterBlock(block, 7, new Pose3Manifold());
-    } else {
-      problem.AddParameterBlock(block, Values::BlockSize(kind));
-    }
-  }
-  for (const auto& factor : graph.factors()) {
-    std::vector<double*> blocks;
-    for (const Key key : factor->keys()) {
-      if (!values.Contains(key)) {
-        throw std::invalid_argument("Optimize: a factor uses " + ToString(key) +
-                                    ", which has no initial value");
-      }
-      blocks.push_back(values.MutableBlock(key));
-    }
-    problem.AddResidualBlock(factor->NewCostFunction().release(), factor->NewLossFunction().release(), blocks);
-    for (const ParameterBound& b : factor->bounds()) {
-      double* block = values.MutableBlock(b.key);
-      problem.SetParameterLowerBound(block, b.index, b.lower);
-      problem.SetParameterUpperBound(block, b.index, b.upper);
-    }
-  }
+  for (const Key key : values.keys()) AddVariable(values, key, problem);
+  for (const auto& factor : graph.factors()) AddFactor(*factor, values, problem, "Optimize");
   for (const Key key : graph.constant_keys()) {
     if (values.Contains(key)) problem.SetParameterBlockConstant(values.MutableBlock(key));
   }
@@ -161,11 +170,14 @@ std::shared_ptr<ceres::ParameterBlockOrdering> CeresOrdering(const FactorGraph& 
   return ordering;
 }
 
-ceres::Problem::Options ProblemOptions() {
+// `removable`: residual blocks are removed one by one (IncrementalOptimizer),
+// which Ceres makes cheap at the cost of a little memory per block.
+ceres::Problem::Options ProblemOptions(bool removable = false) {
   ceres::Problem::Options options;
   // The Problem owns cost and loss functions (the documented hand-off) and
   // manifolds, which BuildProblem creates per block.
   options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  options.enable_fast_removal = removable;
   return options;
 }
 
@@ -189,24 +201,17 @@ class StopTestCallback : public ceres::IterationCallback {
   bool stopped_ = false;
 };
 
-}  // namespace
-
-OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
-                            const OptimizerOptions& options) {
-  Validate(options);
-  OptimizationResult result{initial, {}};
-  Values& values = result.values;
-  ceres::Problem problem(ProblemOptions());
-  BuildProblem(graph, values, problem);
-
+// Levenberg-Marquardt on `problem`, whose blocks are `values`', with
+// `ordering` (null: Ceres' own); `ordering_s`, the time it took, counts as
+// preprocessing. Leaves 2D headings wrapped.
+Summary SolveProblem(ceres::Problem& problem, Values& values, const OptimizerOptions& options,
+                     std::shared_ptr<ceres::ParameterBlockOrdering> ordering, double ordering_s) {
   ceres::Solver::Options solver;
   solver.minimizer_type = ceres::TRUST_REGION;
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-  const auto ordering_start = std::chrono::steady_clock::now();
-  solver.linear_solver_ordering = CeresOrdering(graph, values);
-  const double ordering_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - ordering_start).count();
+  solver.linear_solver_ordering = std::move(ordering);
   solver.max_num_iterations = options.max_iterations;
   solver.function_tolerance = options.function_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
@@ -227,7 +232,7 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
     ceres::Solve(solver, &problem, &ceres_summary);
   }
 
-  Summary& s = result.summary;
+  Summary s;
   switch (ceres_summary.termination_type) {
     case ceres::CONVERGENCE: s.termination = Termination::kConverged; break;
     case ceres::NO_CONVERGENCE: s.termination = Termination::kNoConvergence; break;
@@ -256,7 +261,66 @@ OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
       block[2] = WrapAngle(block[2]);
     }
   }
+  return s;
+}
+
+}  // namespace
+
+OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
+                            const OptimizerOptions& options) {
+  Validate(options);
+  OptimizationResult result{initial, {}};
+  Values& values = result.values;
+  ceres::Problem problem(ProblemOptions());
+  BuildProblem(graph, values, problem);
+  const auto ordering_start = std::chrono::steady_clock::now();
+  std::shared_ptr<ceres::ParameterBlockOrdering> ordering = CeresOrdering(graph, values);
+  const double ordering_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - ordering_start).count();
+  result.summary = SolveProblem(problem, values, options, std::move(ordering), ordering_s);
   return result;
+}
+
+IncrementalOptimizer::IncrementalOptimizer(const OptimizerOptions& options)
+    : options_(options), problem_(std::make_unique<ceres::Problem>(ProblemOptions(true))) {
+  Validate(options_);
+}
+
+IncrementalOptimizer::~IncrementalOptimizer() = default;
+
+void IncrementalOptimizer::InsertNew(Key key, const std::function<void()>& insert) {
+  if (values_.Contains(key)) throw std::invalid_argument("IncrementalOptimizer: " + ToString(key) + " has a value");
+  insert();
+  AddVariable(values_, key, *problem_);
+}
+
+void IncrementalOptimizer::Set(SwitchId id, double value) {
+  values_.AtSwitch(id);  // throws unless a switch
+  values_.Insert(id, value);  // in place: the block stays where the problem has it
+}
+
+IncrementalOptimizer::FactorHandle IncrementalOptimizer::Add(std::unique_ptr<Factor> factor) {
+  factors_.emplace(next_handle_, AddFactor(*factor, values_, *problem_, "IncrementalOptimizer"));
+  return next_handle_++;
+}
+
+void IncrementalOptimizer::Remove(FactorHandle handle) {
+  const auto found = factors_.find(handle);
+  if (found == factors_.end()) throw std::invalid_argument("IncrementalOptimizer: no factor " + std::to_string(handle));
+  problem_->RemoveResidualBlock(found->second);
+  factors_.erase(found);
+}
+
+void IncrementalOptimizer::SetConstant(Key key, bool constant) {
+  double* block = values_.MutableBlock(key);
+  if (constant) {
+    problem_->SetParameterBlockConstant(block);
+  } else {
+    problem_->SetParameterBlockVariable(block);
+  }
+}
+
+Summary IncrementalOptimizer::Solve() {
+  return SolveProblem(*problem_, values_, options_, nullptr, 0.0);
 }
 
 std::vector<Eigen::MatrixXd> JointMarginalCovariances(const FactorGraph& graph, const Values& values,

@@ -3,12 +3,16 @@
 #ifndef CATGRAPH_BACKEND_OPTIMIZER_H_
 #define CATGRAPH_BACKEND_OPTIMIZER_H_
 
+#include <cstdint>
 #include <functional>
+#include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
+#include <ceres/problem.h>
 
 #include "backend/factor_graph.h"
 
@@ -71,6 +75,64 @@ struct OptimizationResult {
 // otherwise.
 OptimizationResult Optimize(const FactorGraph& graph, const Values& initial,
                             const OptimizerOptions& options = {});
+
+// A factor graph solved again and again as it grows, on one ceres::Problem
+// that takes each variable and factor as it arrives (Optimize builds one per
+// call): each Solve starts from the current values, and a factor removed or
+// a variable held constant leaves the rest as it is. Ceres' own elimination
+// order (Optimize may choose a dissection). For an online back end that
+// solves after every few new poses. Thread-compatible.
+//
+//   IncrementalOptimizer optimizer(options);
+//   optimizer.Insert(PoseId(0), Pose2());
+//   optimizer.SetConstant(PoseKey(PoseId(0)));
+//   for (each new pose and its factors) {
+//     optimizer.Insert(id, guess);
+//     const auto handle = optimizer.Add(std::make_unique<BetweenFactor<Pose2>>(...));
+//     optimizer.Solve();
+//   }
+class IncrementalOptimizer {
+ public:
+  using FactorHandle = std::int64_t;
+
+  // Throws std::invalid_argument on bad options.
+  explicit IncrementalOptimizer(const OptimizerOptions& options = {});
+  ~IncrementalOptimizer();
+  IncrementalOptimizer(const IncrementalOptimizer&) = delete;
+  IncrementalOptimizer& operator=(const IncrementalOptimizer&) = delete;
+
+  // A new variable. Throws std::invalid_argument when its key has one.
+  void Insert(PoseId id, const Pose2& pose) { InsertNew(PoseKey(id), [&] { values_.Insert(id, pose); }); }
+  void Insert(PoseId id, const Pose3& pose) { InsertNew(PoseKey(id), [&] { values_.Insert(id, pose); }); }
+  void Insert(SwitchId id, double value) { InsertNew(SwitchKey(id), [&] { values_.Insert(id, value); }); }
+  // A switch's value set between solves. Throws std::out_of_range or
+  // std::invalid_argument when `id` has no switch.
+  void Set(SwitchId id, double value);
+
+  // Adds `factor` over variables inserted before; the handle removes it.
+  // Throws std::invalid_argument for a key without a value.
+  FactorHandle Add(std::unique_ptr<Factor> factor);
+  // Throws std::invalid_argument for a handle not (or no longer) added.
+  void Remove(FactorHandle handle);
+  // Holds `key`'s variable at its value in the solves that follow, or
+  // frees it again.
+  void SetConstant(Key key, bool constant = true);
+
+  // Levenberg-Marquardt from the current values, as Optimize's.
+  Summary Solve();
+
+  const Values& values() const { return values_; }
+  std::size_t num_factors() const { return factors_.size(); }
+
+ private:
+  void InsertNew(Key key, const std::function<void()>& insert);
+
+  OptimizerOptions options_;
+  Values values_;                            // node-based: the problem points into it
+  std::unique_ptr<ceres::Problem> problem_;  // after values_: gone before it
+  std::map<FactorHandle, ceres::ResidualBlockId> factors_;
+  FactorHandle next_handle_ = 0;
+};
 
 // Tangent spaces. A variable's tangent space is the one the optimiser steps
 // in: a Pose2's is its parameters (x, y, theta); a Pose3's is Ceres'

@@ -5,7 +5,10 @@
 // the online map compares with the offline one.
 //
 //   catgraph simulate --scenario office-change -o office-change
-//   OMP_NUM_THREADS=1 taskset -c 0 build/bench/catgraph_bench_mapper office-change
+//   OMP_NUM_THREADS=1 taskset -c 0 build/bench/catgraph_bench_mapper office-change [OPTIONS.yaml]
+//
+// OPTIONS.yaml: MapperOptions changed from the defaults (docs/file-formats.md
+// "Options files"), e.g. `online: {max_iterations: 1}`.
 //
 // The vocabulary is trained before the stream (TrainMapVocabulary), as a
 // robot would carry one; its time is reported apart.
@@ -24,6 +27,7 @@
 #include "frontend/localization.h"
 #include "mapping/map_dataset.h"
 #include "mapping/mapper.h"
+#include "mapping/options_file.h"
 
 namespace {
 
@@ -49,8 +53,8 @@ void PrintLatency(const char* stage, std::vector<double> ms) {
 
 int main(int argc, char** argv) {
   using namespace catgraph;
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: %s DATASET\n", argv[0]);
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: %s DATASET [OPTIONS.yaml]\n", argv[0]);
     return 2;
   }
   try {
@@ -61,12 +65,16 @@ int main(int argc, char** argv) {
                 Seconds(training));
     const FabMapModel model(vocabulary.vocabulary.tree(), FabMapOptions{});
     mapping::MapperOptions options;
+    if (argc == 3) mapping::ReadOptionsFile(argv[2], options);
     options.front_end.threads = 1;
     mapping::Mapper mapper(model, options);
     const std::vector<Pose2> odometry = PosesAtFrames(d, d.odometry), truth = PosesAtFrames(d, d.ground_truth);
     std::vector<double> features_ms, filter_ms, solve_ms, frame_ms;
     std::size_t closures = 0;
+    const Trajectory2 truth_at_frames = mapping::TruthAtFrames(d);
+    std::vector<double> online_ate_m;  // of the map so far, after each solve
     std::map<int, int> iterations;  // online solves by their iterations
+    int rounds = 0;                 // solves, the hierarchy's re-solves included
     for (std::size_t k = 0; k < d.frames.size(); ++k) {
       const auto start = Clock::now();
       Observation z;
@@ -83,6 +91,10 @@ int main(int argc, char** argv) {
       if (r.solve) {
         solve_ms.push_back(solve);
         ++iterations[r.solve->iterations];
+        rounds += r.solve->solves;
+        if (!truth_at_frames.empty() && k > 0) {
+          online_ate_m.push_back(EvaluateTrajectory(mapper.Map(), truth_at_frames).ate_m.rmse);
+        }
       }
       frame_ms.push_back(total);
       closures += r.closures.size();
@@ -98,8 +110,14 @@ int main(int argc, char** argv) {
     PrintLatency("frame, all stages", frame_ms);
     std::printf("online solves by iterations:");
     for (const auto& [n, count] : iterations) std::printf("  %d: %d", n, count);
-    std::printf("\n");
-    const Trajectory2 truth_at_frames = mapping::TruthAtFrames(d);
+    std::printf("; %d solves with the hierarchy's\n", rounds);
+    if (!online_ate_m.empty()) {
+      double sum_ate = 0.0;
+      for (const double a : online_ate_m) sum_ate += a;
+      std::printf("online map's ATE after each solve (the frames so far): mean %.4f m, max %.4f m\n",
+                  sum_ate / static_cast<double>(online_ate_m.size()),
+                  *std::max_element(online_ate_m.begin(), online_ate_m.end()));
+    }
     const auto final_start = Clock::now();
     const mapping::MapOutcome final_solve = mapper.Solve(truth_at_frames);
     std::printf("final solve (offline pipeline): %.2f s\n", Seconds(final_start));

@@ -36,6 +36,7 @@ Mapper::Mapper(const ObservationModel& model, MapperOptions options)
       localizer_(model, options_.front_end) {
   Validate(options_);
   Validate(online_);
+  if (OnlineBackEnd::Supports(online_, options_.hierarchy)) incremental_.emplace(online_, options_.hierarchy);
 }
 
 FrameResult Mapper::AddFrame(const FrameInput& frame, const Observation& z) {
@@ -67,22 +68,35 @@ Trajectory2 Mapper::Map() const {
 
 OnlineSolve Mapper::SolveOnline() {
   const auto start = std::chrono::steady_clock::now();
-  PoseGraph2 graph = front_end().graph;
-  const Trajectory2 guess = Map();
-  for (auto& [id, vertex] : graph.vertices) vertex.pose = guess.at(id);
-  const AnyPoseGraph any(std::move(graph));
-  const HierarchicalOptimization solved =
-      OptimizeWithHierarchy(any, ClosureHierarchy::FromGraph(any), online_, options_.hierarchy);
-  const PoseGraphOptimization& result = solved.optimization;
-  if (!result.summary.IsUsable()) throw std::runtime_error("Mapper: the online solve failed: " + result.summary.message);
-  solved_ = TrajectoryOf(std::get<PoseGraph2>(result.graph));
-  decisions_.clear();
-  for (const ClosureDecision& c : result.closures) decisions_.emplace(c.id, c);
+  Summary summary;
   OnlineSolve out;
+  if (incremental_) {
+    const OnlineBackEnd::Solve solved = incremental_->Update(front_end().graph);
+    summary = solved.summary;
+    out.solves = solved.solves;
+    out.accepted = static_cast<int>(solved.accepted);
+    out.rejected = static_cast<int>(solved.rejected);
+    solved_ = incremental_->Poses();
+    decisions_ = incremental_->decisions();
+  } else {
+    PoseGraph2 graph = front_end().graph;
+    const Trajectory2 guess = Map();
+    for (auto& [id, vertex] : graph.vertices) vertex.pose = guess.at(id);
+    const AnyPoseGraph any(std::move(graph));
+    const HierarchicalOptimization solved =
+        OptimizeWithHierarchy(any, ClosureHierarchy::FromGraph(any), online_, options_.hierarchy);
+    const PoseGraphOptimization& result = solved.optimization;
+    summary = result.summary;
+    out.solves = solved.solves;
+    out.accepted = static_cast<int>(result.accepted);
+    out.rejected = static_cast<int>(result.rejected);
+    solved_ = TrajectoryOf(std::get<PoseGraph2>(result.graph));
+    decisions_.clear();
+    for (const ClosureDecision& c : result.closures) decisions_.emplace(c.id, c);
+  }
+  if (!summary.IsUsable()) throw std::runtime_error("Mapper: the online solve failed: " + summary.message);
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  out.iterations = result.summary.iterations;
-  out.accepted = static_cast<int>(result.accepted);
-  out.rejected = static_cast<int>(result.rejected);
+  out.iterations = summary.iterations;
   return out;
 }
 

@@ -12,7 +12,9 @@
 //   }
 //   const mapping::MapOutcome final = mapper.Solve();  // the full robust solve, as offline
 //
-// Online solves are a few iterations from the last map (OnlineSolveOptions);
+// Online solves are a few iterations from the last map (OnlineSolveOptions):
+// with switchable constraints (the default) on one problem that grows with
+// the graph (OnlineBackEnd), with another method a new solve each time.
 // Solve() runs the back end exactly as MapDataset's first solve does, so the
 // final map of a streamed dataset equals the offline one. The back end's rejections of visual closures reach CAT-Graph+
 // only offline (SolveWithFeedback re-runs the front end with them vetoed);
@@ -31,6 +33,7 @@
 #include "frontend/localization.h"
 #include "hierarchy/closure_hierarchy.h"
 #include "mapping/map_dataset.h"
+#include "mapping/online_back_end.h"
 
 namespace catgraph::mapping {
 
@@ -67,6 +70,7 @@ PoseGraphOptimizerOptions OnlineSolveOptions(const PoseGraphOptimizerOptions& ba
 struct OnlineSolve {
   double time_s = 0.0;  // wall clock, the hierarchy's re-solves included
   int iterations = 0;   // of the last solve
+  int solves = 1;       // the hierarchy's rounds included
   int accepted = 0, rejected = 0;  // closures so far
 };
 
@@ -110,6 +114,7 @@ class Mapper {
   MapperOptions options_;
   PoseGraphOptimizerOptions online_;
   Localizer localizer_;
+  std::optional<OnlineBackEnd> incremental_;      // when it supports the options
   Trajectory2 solved_;                             // the last online solve's poses
   std::map<ClosureId, ClosureDecision> decisions_;
 };

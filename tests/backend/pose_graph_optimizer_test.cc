@@ -176,6 +176,61 @@ TEST_CASE("a caller's stop test ends the solve where it says, with the values it
   CHECK_FALSE(full.summary.stopped_by_test);
 }
 
+TEST_CASE("an incremental optimizer grows a graph and solves it as Optimize solves the whole", "[backend][api]") {
+  Eigen::Matrix3d information;
+  information << 10, 2, 0, 2, 10, 1, 0, 1, 50;
+  const SquareLoop loop = MakeSquareLoop({0.2, -0.1, 0.1}, information);
+  auto odometry = [&](int k) {
+    return RelativePoseMeasurement<Pose2>{loop.truth[k - 1].Between(loop.truth[k]), information};
+  };
+  IncrementalOptimizer optimizer;
+  // The square's poses and odometry one by one, each solve from where the
+  // last one ended.
+  optimizer.Insert(PoseId(0), loop.initial.AtPose2(PoseId(0)));
+  optimizer.SetConstant(PoseKey(PoseId(0)));
+  for (int k = 1; k < 4; ++k) {
+    optimizer.Insert(PoseId(k), loop.initial.AtPose2(PoseId(k)));
+    optimizer.Add(std::make_unique<BetweenFactor<Pose2>>(PoseId(k - 1), PoseId(k), odometry(k)));
+    REQUIRE(optimizer.Solve().IsUsable());
+  }
+  // Odometry alone: the poses follow it exactly from the held pose.
+  for (int k = 1; k < 4; ++k) CHECK(testing::ApproxEqual(optimizer.values().AtPose2(PoseId(k)), loop.truth[k], 1e-6));
+  // A closing edge that disagrees: the whole loop's least squares, as
+  // Optimize finds it from scratch.
+  const RelativePoseMeasurement<Pose2> closing{Pose2(0.3, 0.1, 0.05) * loop.truth[3].Between(loop.truth[0]),
+                                               information};
+  const auto closure = optimizer.Add(std::make_unique<BetweenFactor<Pose2>>(PoseId(3), PoseId(0), closing));
+  CHECK(optimizer.num_factors() == 4);
+  REQUIRE(optimizer.Solve().IsUsable());
+  FactorGraph whole;
+  for (int k = 1; k < 4; ++k) whole.Emplace<BetweenFactor<Pose2>>(PoseId(k - 1), PoseId(k), odometry(k));
+  whole.Emplace<BetweenFactor<Pose2>>(PoseId(3), PoseId(0), closing);
+  whole.SetConstant(PoseKey(PoseId(0)));
+  const OptimizationResult reference = Optimize(whole, loop.initial);
+  for (int k = 0; k < 4; ++k) {
+    CHECK(testing::ApproxEqual(optimizer.values().AtPose2(PoseId(k)), reference.values.AtPose2(PoseId(k)), 1e-6));
+  }
+  CHECK_FALSE(testing::ApproxEqual(optimizer.values().AtPose2(PoseId(3)), loop.truth[3], 1e-3));
+  // The closure removed and pose 2 held: pose 2 stays, pose 3 follows its
+  // odometry from it.
+  optimizer.Remove(closure);
+  optimizer.SetConstant(PoseKey(PoseId(2)));
+  const Pose2 held = optimizer.values().AtPose2(PoseId(2));
+  REQUIRE(optimizer.Solve().IsUsable());
+  CHECK(testing::ApproxEqual(optimizer.values().AtPose2(PoseId(2)), held, 1e-12));
+  CHECK(testing::ApproxEqual(optimizer.values().AtPose2(PoseId(3)), held * odometry(3).mean, 1e-6));
+  // A switch set between solves; mistakes refused.
+  optimizer.Insert(SwitchId(7), 1.0);
+  optimizer.Set(SwitchId(7), 0.25);
+  CHECK(optimizer.values().AtSwitch(SwitchId(7)) == 0.25);
+  CHECK_THROWS_AS(optimizer.Insert(PoseId(1), Pose2()), std::invalid_argument);
+  CHECK_THROWS_AS(optimizer.Set(SwitchId(8), 1.0), std::out_of_range);
+  CHECK_THROWS_AS(optimizer.Remove(closure), std::invalid_argument);
+  CHECK_THROWS_AS(optimizer.Add(std::make_unique<BetweenFactor<Pose2>>(PoseId(3), PoseId(9), closing)),
+                  std::invalid_argument);
+  CHECK(optimizer.num_factors() == 3);
+}
+
 // Two steps from a pose held constant, both measuring no motion, linearised
 // at the identity where every Jacobian is +-I: the second pose's covariance
 // is the sum of the steps' covariances, the first's is the first step's, and

@@ -153,6 +153,10 @@ TEST_CASE("on a ring the Mapper reports each closure at its frame, re-solves whe
   MapperOptions options;
   options.front_end.filter.num_particles = 500;
   options.front_end.filter.new_place.log_offset = 0.0;  // 3 words a frame, not a real image's 70
+  // Switchable constraints solve online on one growing problem
+  // (OnlineBackEnd); another method re-solves from scratch each time.
+  options.back_end.method = GENERATE(RobustMethod::kSwitchable, RobustMethod::kNone, RobustMethod::kGnc);
+  CAPTURE(ToString(options.back_end.method));
   Mapper mapper(model, options);
   Localizer offline(model, options.front_end);
   Pose2 odometry;
