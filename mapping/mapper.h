@@ -49,9 +49,9 @@ struct MapperOptions {
   // when Solve() is called.
   bool solve_online = true;
   // Iterations an online solve takes at most; >= 1. Each starts from the
-  // last one's map, so the map converges over the solves that follow: 3
-  // keeps an online solve at 3,000 poses under 50 ms (p95) with the final
-  // map's accuracy (docs/mapping.md).
+  // last one's map, so the map converges over the solves that follow; with
+  // fewer than 3 the map seen while driving is worse on every simulated
+  // dataset measured (docs/mapping.md).
   int online_max_iterations = 3;
 };
 // Every part (the libraries' Validate), and a hierarchy the front end's
