@@ -18,8 +18,10 @@ std::string Named(const Constraint<Pose2>& c) { return "constraint " + std::to_s
 }  // namespace
 
 bool OnlineBackEnd::Supports(const PoseGraphOptimizerOptions& o, const HierarchyOptions& hierarchy) {
+  const bool from_scratch_stages = o.gate.estimate_noise_scale || o.gate.narrow || o.refinement.enabled ||
+                                   o.readmission.enabled || o.initial_guess != InitialGuess::kFile;
   return o.method == RobustMethod::kSwitchable && !o.robust_odometry && o.disabled_closures.empty() &&
-         o.coupled_closures.empty() && hierarchy.policy != HierarchyPolicy::kCoupled;
+         o.coupled_closures.empty() && hierarchy.policy != HierarchyPolicy::kCoupled && !from_scratch_stages;
 }
 
 OnlineBackEnd::OnlineBackEnd(const PoseGraphOptimizerOptions& options, const HierarchyOptions& hierarchy)
@@ -28,8 +30,8 @@ OnlineBackEnd::OnlineBackEnd(const PoseGraphOptimizerOptions& options, const Hie
   Validate(hierarchy_options_);
   if (!Supports(options_, hierarchy_options_)) {
     throw std::invalid_argument(
-        "OnlineBackEnd: solves switchable constraints on loop closures only, without disabled or coupled "
-        "closures or the coupled hierarchy");
+        "OnlineBackEnd: solves switchable constraints on loop closures only, from the last solution "
+        "(OnlineSolveOptions), without disabled or coupled closures or the coupled hierarchy");
   }
   prior_ = {1.0, options_.switch_prior_information > 0.0 ? options_.switch_prior_information
                                                          : Gate<Pose2>(options_.cost, options_.gate.probability)};

@@ -30,10 +30,12 @@ namespace catgraph::mapping {
 
 class OnlineBackEnd {
  public:
-  // Whether `options` (OnlineSolveOptions') and the hierarchy can be solved
-  // incrementally: the switchable method on loop closures only, no
-  // closures disabled or coupled by the caller, and a hierarchy policy
-  // other than coupled. The Mapper re-solves from scratch otherwise.
+  // Whether `options` and the hierarchy can be solved incrementally: the
+  // switchable method on loop closures only, from the last solution
+  // without the stages that measure or re-decide from scratch (as
+  // OnlineSolveOptions leaves them), no closures disabled or coupled by the
+  // caller, and a hierarchy policy other than coupled. The Mapper re-solves
+  // from scratch otherwise.
   static bool Supports(const PoseGraphOptimizerOptions& options, const HierarchyOptions& hierarchy);
 
   // Throws std::invalid_argument when Supports() is false or an option is

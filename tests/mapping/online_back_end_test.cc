@@ -117,6 +117,7 @@ TEST_CASE("the online back end refuses what it cannot solve incrementally", "[ma
   const PoseGraphOptimizerOptions options = OnlineSolveOptions(PoseGraphOptimizerOptions{}, 3);
   CHECK_FALSE(OnlineBackEnd::Supports(options, HierarchyOptions{HierarchyPolicy::kCoupled, 50}));
   CHECK(OnlineBackEnd::Supports(options, HierarchyOptions{}));
+  CHECK_FALSE(OnlineBackEnd::Supports(PoseGraphOptimizerOptions{}, HierarchyOptions{}));  // the offline stages
 
   OnlineBackEnd online(options, HierarchyOptions{});
   PoseGraph2 first = world.graph;
