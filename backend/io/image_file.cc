@@ -37,7 +37,12 @@ std::uint32_t LittleEndian(const std::string& b, std::size_t at, int bytes) {
   return v;
 }
 
-bool IsPnm(const std::string& b) { return b.size() >= 2 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6'; }
+// "P1" to "P6" and a blank, as the format (and OpenCV's decoder) requires:
+// without the blank OpenCV would try its other decoders, DICOM among them,
+// which asserts on a malformed file.
+bool IsPnm(const std::string& b) {
+  return b.size() >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6' && std::isspace(static_cast<unsigned char>(b[2]));
+}
 bool IsBmp(const std::string& b) { return b.starts_with("BM"); }
 
 // Width and height a PNM (PBM, PGM, PPM) or BMP header declares, read
